@@ -1,0 +1,532 @@
+//! The compiled routing problem the solvers work on: fixed capacity, dense
+//! tables, built once per network change and then only read.
+//!
+//! Contract: a [`Problem`] is a snapshot of one [`Instance`] (or of the live
+//! world) with an optional start override, excluded nodes and a budget. All
+//! buffers are allocated by [`Problem::new`]; [`Problem::load_instance`] and
+//! the `begin`/`set_edge`/`finish` sequence refill them without allocating, so
+//! the re-planning service can rebuild in place. Nothing here knows about PSO,
+//! BBO or transport (house style §2).
+//!
+//! The figures it derives (edge time, weight, feasibility) follow
+//! `instance-format.md` exactly; [`crate::route::RouteStats::from_instance`]
+//! recomputes them independently and the tests hold the two equal.
+
+use crate::instance::{Instance, Objective};
+
+/// Largest network the planner handles. 128 covers the paper's 40-node
+/// networks, the largest classic orienteering set (66 nodes) and the issue's
+/// "at least 128" requirement, and lets a node set be one `u128`.
+pub const MAX_NODES: usize = 128;
+
+/// Relative tolerance of the feasibility test `T_R ≤ T_available`
+/// (instance format: "within 1e-6 relative").
+pub const FEASIBILITY_REL_TOL: f64 = 1e-6;
+
+/// A set of node ids, one bit per node.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NodeSet(pub u128);
+
+impl NodeSet {
+    /// The empty set.
+    pub const EMPTY: Self = Self(0);
+
+    /// Adds `i`.
+    #[inline]
+    pub fn insert(&mut self, i: usize) {
+        self.0 |= 1u128 << i;
+    }
+
+    /// Removes `i`.
+    #[inline]
+    pub fn remove(&mut self, i: usize) {
+        self.0 &= !(1u128 << i);
+    }
+
+    /// Whether `i` is in the set.
+    #[inline]
+    pub fn contains(self, i: usize) -> bool {
+        self.0 >> i & 1 == 1
+    }
+
+    /// Number of members.
+    #[inline]
+    pub fn len(self) -> u32 {
+        self.0.count_ones()
+    }
+
+    /// Whether the set is empty.
+    #[inline]
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// Members in increasing order.
+    #[inline]
+    pub fn iter(self) -> impl Iterator<Item = usize> {
+        let mut bits = self.0;
+        core::iter::from_fn(move || {
+            if bits == 0 {
+                None
+            } else {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                Some(i)
+            }
+        })
+    }
+}
+
+/// Why a problem could not be built.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum ProblemError {
+    /// More nodes than [`MAX_NODES`].
+    #[error("{0} nodes exceed the planner's capacity of {MAX_NODES}")]
+    TooManyNodes(usize),
+    /// Fewer than two nodes.
+    #[error("a route needs at least 2 nodes, got {0}")]
+    TooFewNodes(usize),
+    /// A node id outside 0..n.
+    #[error("node {node} is out of range for {n} nodes")]
+    NodeOutOfRange {
+        /// The id.
+        node: usize,
+        /// Node count.
+        n: usize,
+    },
+    /// Start equals goal.
+    #[error("start and goal are both node {0}")]
+    StartIsGoal(usize),
+    /// The start or goal is excluded.
+    #[error("node {0} is both excluded and an endpoint of the route")]
+    EndpointExcluded(usize),
+    /// A budget that is not a positive finite number.
+    #[error("time budget {0} s must be finite and > 0")]
+    BadBudget(f64),
+    /// Speed not positive and finite.
+    #[error("speed {0} m/s must be finite and > 0")]
+    BadSpeed(f64),
+    /// No path at all joins start and goal.
+    #[error("no path joins start {start} and goal {goal}")]
+    GoalUnreachable {
+        /// Start id.
+        start: usize,
+        /// Goal id.
+        goal: usize,
+    },
+}
+
+/// Dense per-pair tables, boxed because they are large (5 × 128 KiB).
+struct Tables {
+    /// Edge time T_ab = d_ab / v + δ_ab, s; +∞ where there is no edge.
+    time_s: [[f64; MAX_NODES]; MAX_NODES],
+    /// 3-D length d_ab, m.
+    distance_m: [[f64; MAX_NODES]; MAX_NODES],
+    /// Edge weight ρ/ξ plus the prize of the far node `b`.
+    gain: [[f64; MAX_NODES]; MAX_NODES],
+    /// ξ/ρ of the edge's task (0 when ρ = 0), for `paper_cost`.
+    risk_ratio: [[f64; MAX_NODES]; MAX_NODES],
+    /// Look-ahead: T_ab + shortest time from b to the goal; +∞ where there is
+    /// no edge or b is excluded. A decoder may step to b only if this fits in
+    /// the time left.
+    reach_s: [[f64; MAX_NODES]; MAX_NODES],
+}
+
+/// One routing problem, ready for the solvers.
+pub struct Problem {
+    n: usize,
+    start: usize,
+    goal: usize,
+    budget_s: f64,
+    objective: Objective,
+    adjacency: [NodeSet; MAX_NODES],
+    excluded: NodeSet,
+    prize: [f64; MAX_NODES],
+    to_goal_s: [f64; MAX_NODES],
+    tables: Box<Tables>,
+}
+
+impl Problem {
+    /// An empty problem with every buffer allocated. Load it with
+    /// [`Problem::load_instance`] or `begin`/`set_edge`/`finish`.
+    pub fn new() -> Self {
+        // Build the large table directly on the heap (a 640 KiB value would
+        // overflow small thread stacks on its way into the Box).
+        let tables: Box<Tables> = {
+            let mut v: Vec<Tables> = Vec::with_capacity(1);
+            // SAFETY: Tables is plain f64 arrays; we initialise every field
+            // before use by writing the whole value through the raw pointer.
+            unsafe {
+                let p = v.as_mut_ptr();
+                for row in 0..MAX_NODES {
+                    for col in 0..MAX_NODES {
+                        (*p).time_s[row][col] = f64::INFINITY;
+                        (*p).distance_m[row][col] = 0.0;
+                        (*p).gain[row][col] = 0.0;
+                        (*p).risk_ratio[row][col] = 0.0;
+                        (*p).reach_s[row][col] = f64::INFINITY;
+                    }
+                }
+                v.set_len(1);
+            }
+            let slice = v.into_boxed_slice();
+            // SAFETY: a boxed slice of exactly one element has the layout of a Box<T>.
+            unsafe { Box::from_raw(Box::into_raw(slice) as *mut Tables) }
+        };
+        Self {
+            n: 0,
+            start: 0,
+            goal: 0,
+            budget_s: 0.0,
+            objective: Objective::MaxWeight,
+            adjacency: [NodeSet::EMPTY; MAX_NODES],
+            excluded: NodeSet::EMPTY,
+            prize: [0.0; MAX_NODES],
+            to_goal_s: [f64::INFINITY; MAX_NODES],
+            tables,
+        }
+    }
+
+    /// Builds a problem from an instance as it stands (its start, goal and budget).
+    pub fn from_instance(inst: &Instance) -> Result<Self, ProblemError> {
+        let mut p = Self::new();
+        p.load_instance(inst, inst.start, NodeSet::EMPTY, inst.time_available_s)?;
+        Ok(p)
+    }
+
+    /// Refills this problem from `inst`, starting at `start` with `budget_s`
+    /// left and the `excluded` nodes removed (the re-planning case). Does not
+    /// allocate.
+    pub fn load_instance(
+        &mut self,
+        inst: &Instance,
+        start: usize,
+        excluded: NodeSet,
+        budget_s: f64,
+    ) -> Result<(), ProblemError> {
+        if !(inst.speed_mps.is_finite() && inst.speed_mps > 0.0) {
+            return Err(ProblemError::BadSpeed(inst.speed_mps));
+        }
+        self.begin(inst.nodes.len(), start, inst.goal, budget_s, inst.objective, excluded)?;
+        for (i, node) in inst.nodes.iter().enumerate() {
+            self.prize[i] = node.prize;
+        }
+        for e in &inst.edges {
+            let d = inst.distance(e.a, e.b);
+            self.set_edge(
+                e.a,
+                e.b,
+                d,
+                edge_time_s(d, inst.speed_mps, e.task_time_s),
+                e.priority,
+                e.risk,
+            );
+        }
+        self.finish()
+    }
+
+    /// Starts a fresh fill: `n` nodes, no edges, no prizes.
+    pub fn begin(
+        &mut self,
+        n: usize,
+        start: usize,
+        goal: usize,
+        budget_s: f64,
+        objective: Objective,
+        excluded: NodeSet,
+    ) -> Result<(), ProblemError> {
+        if n > MAX_NODES {
+            return Err(ProblemError::TooManyNodes(n));
+        }
+        if n < 2 {
+            return Err(ProblemError::TooFewNodes(n));
+        }
+        for node in [start, goal] {
+            if node >= n {
+                return Err(ProblemError::NodeOutOfRange { node, n });
+            }
+            if excluded.contains(node) {
+                return Err(ProblemError::EndpointExcluded(node));
+            }
+        }
+        if start == goal {
+            return Err(ProblemError::StartIsGoal(start));
+        }
+        if !(budget_s.is_finite() && budget_s > 0.0) {
+            return Err(ProblemError::BadBudget(budget_s));
+        }
+        // Clear only what the previous fill may have touched.
+        let old_n = self.n.max(n);
+        for row in 0..old_n {
+            self.tables.time_s[row][..old_n].fill(f64::INFINITY);
+            self.tables.reach_s[row][..old_n].fill(f64::INFINITY);
+            self.tables.distance_m[row][..old_n].fill(0.0);
+            self.tables.gain[row][..old_n].fill(0.0);
+            self.tables.risk_ratio[row][..old_n].fill(0.0);
+            self.adjacency[row] = NodeSet::EMPTY;
+            self.prize[row] = 0.0;
+        }
+        self.n = n;
+        self.start = start;
+        self.goal = goal;
+        self.budget_s = budget_s;
+        self.objective = objective;
+        let all = if n == 128 { u128::MAX } else { (1u128 << n) - 1 };
+        self.excluded = NodeSet(excluded.0 & all);
+        Ok(())
+    }
+
+    /// Sets the prize of node `i` (classic orienteering instances).
+    pub fn set_prize(&mut self, i: usize, prize: f64) {
+        self.prize[i] = prize;
+    }
+
+    /// Adds the undirected edge `a`–`b` (ids < n, a ≠ b) with its length,
+    /// time and task. Edges touching an excluded node are ignored.
+    pub fn set_edge(&mut self, a: usize, b: usize, distance_m: f64, time_s: f64, priority: f64, risk: f64) {
+        debug_assert!(a < self.n && b < self.n && a != b);
+        if self.excluded.contains(a) || self.excluded.contains(b) {
+            return;
+        }
+        let weight = priority / risk;
+        let ratio = if priority > 0.0 { risk / priority } else { 0.0 };
+        let t = &mut self.tables;
+        for (u, v) in [(a, b), (b, a)] {
+            t.time_s[u][v] = time_s;
+            t.distance_m[u][v] = distance_m;
+            t.risk_ratio[u][v] = ratio;
+            self.adjacency[u].insert(v);
+        }
+        // Prizes are added in `finish`, once every prize is known.
+        t.gain[a][b] = weight;
+        t.gain[b][a] = weight;
+    }
+
+    /// Completes a fill: adds prizes to the gain table and computes the
+    /// shortest time to the goal and the look-ahead table.
+    pub fn finish(&mut self) -> Result<(), ProblemError> {
+        let n = self.n;
+        for u in 0..n {
+            for v in self.adjacency[u].iter() {
+                self.tables.gain[u][v] += self.prize[v];
+            }
+        }
+        self.shortest_times_to_goal();
+        for u in 0..n {
+            for v in 0..n {
+                self.tables.reach_s[u][v] = self.tables.time_s[u][v] + self.to_goal_s[v];
+            }
+        }
+        if !self.to_goal_s[self.start].is_finite() {
+            return Err(ProblemError::GoalUnreachable {
+                start: self.start,
+                goal: self.goal,
+            });
+        }
+        Ok(())
+    }
+
+    /// Dijkstra from the goal over non-excluded nodes (dense O(n²), no heap).
+    fn shortest_times_to_goal(&mut self) {
+        let n = self.n;
+        let mut done = self.excluded;
+        self.to_goal_s[..n].fill(f64::INFINITY);
+        self.to_goal_s[self.goal] = 0.0;
+        loop {
+            let mut u = usize::MAX;
+            let mut best = f64::INFINITY;
+            for v in 0..n {
+                if !done.contains(v) && self.to_goal_s[v] < best {
+                    best = self.to_goal_s[v];
+                    u = v;
+                }
+            }
+            if u == usize::MAX {
+                break;
+            }
+            done.insert(u);
+            for v in self.adjacency[u].iter() {
+                let cand = best + self.tables.time_s[u][v];
+                if cand < self.to_goal_s[v] {
+                    self.to_goal_s[v] = cand;
+                }
+            }
+        }
+    }
+
+    /// Node count.
+    #[inline]
+    pub fn n(&self) -> usize {
+        self.n
+    }
+    /// Start node.
+    #[inline]
+    pub fn start(&self) -> usize {
+        self.start
+    }
+    /// Goal node.
+    #[inline]
+    pub fn goal(&self) -> usize {
+        self.goal
+    }
+    /// Time budget, s.
+    #[inline]
+    pub fn budget_s(&self) -> f64 {
+        self.budget_s
+    }
+    /// The budget with the feasibility tolerance applied: a route is
+    /// feasible when its time is at most this.
+    #[inline]
+    pub fn budget_limit_s(&self) -> f64 {
+        self.budget_s * (1.0 + FEASIBILITY_REL_TOL)
+    }
+    /// The objective.
+    #[inline]
+    pub fn objective(&self) -> Objective {
+        self.objective
+    }
+    /// Neighbours of `u` (excluded nodes removed).
+    #[inline]
+    pub fn neighbours(&self, u: usize) -> NodeSet {
+        self.adjacency[u]
+    }
+    /// Nodes removed from this problem (already visited in a mission).
+    #[inline]
+    pub fn excluded(&self) -> NodeSet {
+        self.excluded
+    }
+    /// Whether `a`–`b` is an edge.
+    #[inline]
+    pub fn has_edge(&self, a: usize, b: usize) -> bool {
+        self.adjacency[a].contains(b)
+    }
+    /// Edge time, s (+∞ when no edge).
+    #[inline]
+    pub fn time_s(&self, a: usize, b: usize) -> f64 {
+        self.tables.time_s[a][b]
+    }
+    /// Edge length, m.
+    #[inline]
+    pub fn distance_m(&self, a: usize, b: usize) -> f64 {
+        self.tables.distance_m[a][b]
+    }
+    /// Weight gained by travelling a→b: the edge's ρ/ξ plus b's prize.
+    #[inline]
+    pub fn gain(&self, a: usize, b: usize) -> f64 {
+        self.tables.gain[a][b]
+    }
+    /// ξ/ρ of the edge's task (0 when ρ = 0).
+    #[inline]
+    pub fn risk_ratio(&self, a: usize, b: usize) -> f64 {
+        self.tables.risk_ratio[a][b]
+    }
+    /// Prize of node `i`.
+    #[inline]
+    pub fn prize(&self, i: usize) -> f64 {
+        self.prize[i]
+    }
+    /// Shortest time from `u` to the goal over non-excluded nodes, s.
+    #[inline]
+    pub fn to_goal_s(&self, u: usize) -> f64 {
+        self.to_goal_s[u]
+    }
+    /// Row `u` of the look-ahead table (first `n` entries meaningful).
+    #[inline]
+    pub fn reach_row(&self, u: usize) -> &[f64; MAX_NODES] {
+        &self.tables.reach_s[u]
+    }
+    /// Row `u` of the edge-time table.
+    #[inline]
+    pub fn time_row(&self, u: usize) -> &[f64; MAX_NODES] {
+        &self.tables.time_s[u]
+    }
+}
+
+impl Default for Problem {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Edge time T = d / v + δ (instance format, "Derived quantities"). The one
+/// place this formula lives.
+#[inline]
+pub fn edge_time_s(distance_m: f64, speed_mps: f64, task_time_s: f64) -> f64 {
+    distance_m / speed_mps + task_time_s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixtures::line_instance;
+
+    #[test]
+    fn tables_follow_the_format_formulas() {
+        let p = Problem::from_instance(&line_instance()).unwrap();
+        assert_eq!(p.time_s(0, 1), 110.0);
+        assert_eq!(p.time_s(0, 3), 310.0);
+        assert_eq!(p.gain(1, 2), 6.0);
+        assert!(!p.has_edge(0, 2));
+        assert_eq!(p.time_s(0, 2), f64::INFINITY);
+        assert_eq!(p.to_goal_s(0), 310.0);
+        assert_eq!(p.to_goal_s(1), 220.0);
+        assert_eq!(p.reach_row(0)[1], 110.0 + 220.0);
+    }
+
+    #[test]
+    fn excluding_a_node_removes_its_edges_and_reroutes_the_lookahead() {
+        let inst = line_instance();
+        let mut p = Problem::new();
+        let mut ex = NodeSet::EMPTY;
+        ex.insert(2);
+        p.load_instance(&inst, 1, ex, 1000.0).unwrap();
+        assert!(!p.has_edge(1, 2));
+        assert_eq!(p.to_goal_s(1), 110.0 + 310.0);
+    }
+
+    #[test]
+    fn reloading_a_smaller_instance_clears_the_old_one() {
+        let mut p = Problem::from_instance(&line_instance()).unwrap();
+        let mut small = line_instance();
+        small.nodes.truncate(2);
+        small.goal = 1;
+        small.edges = vec![small.edges[0]];
+        p.load_instance(&small, 0, NodeSet::EMPTY, 500.0).unwrap();
+        assert_eq!(p.n(), 2);
+        assert_eq!(p.time_s(1, 2), f64::INFINITY);
+        assert!(p.neighbours(2).is_empty());
+    }
+
+    #[test]
+    fn bad_shapes_are_errors() {
+        let mut inst = line_instance();
+        inst.edges.retain(|e| e.b != 3);
+        assert!(matches!(
+            Problem::from_instance(&inst),
+            Err(ProblemError::GoalUnreachable { .. })
+        ));
+        let mut big = line_instance();
+        big.nodes = vec![big.nodes[0]; MAX_NODES + 1];
+        assert!(matches!(
+            Problem::from_instance(&big),
+            Err(ProblemError::TooManyNodes(129))
+        ));
+        let mut p = Problem::new();
+        assert!(matches!(
+            p.begin(4, 0, 3, f64::NAN, Objective::MaxWeight, NodeSet::EMPTY),
+            Err(ProblemError::BadBudget(_))
+        ));
+    }
+
+    #[test]
+    fn node_set_basics() {
+        let mut s = NodeSet::EMPTY;
+        s.insert(0);
+        s.insert(127);
+        s.insert(5);
+        assert_eq!(s.iter().collect::<Vec<_>>(), vec![0, 5, 127]);
+        s.remove(5);
+        assert!(!s.contains(5));
+        assert_eq!(s.len(), 2);
+    }
+}

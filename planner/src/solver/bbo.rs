@@ -1,0 +1,1 @@
+//! Biogeography-based optimisation on priority vectors (the paper's BBO).

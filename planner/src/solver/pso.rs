@@ -1,0 +1,1 @@
+//! Particle swarm optimisation on priority vectors (the paper's PSO).
