@@ -1,14 +1,22 @@
 //! Real-time task-assign route planner for autonomous underwater vehicles.
 //!
 //! The data path reads top to bottom, nothing reaching back up:
-//! chart → world/scenario → snapshot ([`instance::Instance`]) →
+//! [`chart`] → [`scenario`] (the world) → snapshot ([`instance::Instance`]) →
 //! [`problem::Problem`] → [`solver`] → [`route::Route`] → message.
 #![warn(missing_docs)]
 
+pub mod alloc_counter;
+pub mod chart;
 pub mod decode;
 pub mod fixtures;
 pub mod instance;
+pub mod montecarlo;
+pub mod oplib;
+pub mod plot;
 pub mod problem;
 pub mod rng;
 pub mod route;
+pub mod scenario;
+pub mod solution;
 pub mod solver;
+pub mod truncnorm;
