@@ -5,7 +5,8 @@
 //! # Contract
 //! - [`World::generate`] builds the world from a [`ScenarioConfig`], a `u64`
 //!   seed and any [`WaterMap`]; the same three give the same world, bit for
-//!   bit. It is the only call that allocates.
+//!   bit. Generation, cloning and snapshots allocate; the per-update calls
+//!   below do not.
 //! - Every waypoint is over water (`WaterMap::is_water`), inside the chart
 //!   (x ∈ [0, width], y ∈ [0, height]) and inside the depth range
 //!   z ∈ [0, `depth_max_m`]; a dynamic waypoint also stays inside its bound:
@@ -566,7 +567,8 @@ impl World {
         &self.nominal
     }
     /// Per-axis bounds, m, by node id (zero for static waypoints). Plots draw
-    /// the horizontal bound as a circle of radius max(x, y) or an ellipse.
+    /// the horizontal bound as an ellipse around the nominal position with
+    /// semi-axes (x, y) (`plot::BoundMarker`).
     #[inline]
     pub fn bounds(&self) -> &[Vec3] {
         &self.bound
