@@ -131,6 +131,12 @@ pub const EMBEDDED_CHART_PNG: &[u8] = include_bytes!("../../assets/benoits-cove.
 /// naming the chart.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ChartError {
+    /// A scenario named an embedded chart the binary does not carry.
+    #[error("unknown embedded chart `{name}`: the embedded chart is `benoits-cove`; give other charts as a PNG file")]
+    UnknownEmbedded {
+        /// The name asked for.
+        name: String,
+    },
     /// The file could not be read.
     #[error("cannot read chart file `{path}`: {reason}")]
     Io {
