@@ -1,9 +1,84 @@
-//! Criterion benches for the planner's hot paths.
-use criterion::{Criterion, criterion_group, criterion_main};
+//! Criterion benches for the planner's hot paths (issue 2 §7): decoding one
+//! priority vector, and a full paper budget of PSO (150 particles × 150
+//! iterations) and BBO (50 habitats × 150 generations), at n = 40, 80, 128.
+//!
+//! Networks: `fixtures::random_instance` with edge density 0.4, tasks and
+//! speed as in the paper's model (ρ ~ U[1, 10], ξ ~ U[0.1, 1], δ ~ U[120,
+//! 900] s, v = 1.5 m/s) and the paper's 31 000 s budget. They stand in for
+//! the scenario generator's chart-based networks; the benches will switch to
+//! those when that generator lands.
+//!
+//! Run: `cargo bench --bench solvers -- --warm-up-time 1 --measurement-time 3`
+//! (single-threaded; the medians are what the issue's targets refer to).
+use std::hint::black_box;
 
-fn placeholder(c: &mut Criterion) {
-    c.bench_function("noop", |b| b.iter(|| std::hint::black_box(1 + 1)));
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use planner::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN};
+use planner::fixtures::random_instance;
+use planner::problem::{MAX_NODES, Problem};
+use planner::rng::PlannerRng;
+use planner::route::Route;
+use planner::solver::bbo::{Bbo, BboSettings};
+use planner::solver::pso::{Pso, PsoSettings};
+use planner::solver::{Budget, Solver, run};
+
+const SIZES: [usize; 3] = [40, 80, 128];
+const DENSITY: f64 = 0.4;
+const BUDGET_S: f64 = 31_000.0;
+
+fn problem(n: usize) -> Problem {
+    Problem::from_instance(&random_instance(n, DENSITY, BUDGET_S, 1000 + n as u64))
+        .expect("bench networks at density 0.4 are connected")
 }
 
-criterion_group!(benches, placeholder);
+fn decode(c: &mut Criterion) {
+    let mut g = c.benchmark_group("decode");
+    for n in SIZES {
+        let p = problem(n);
+        // A pool of random vectors so the branch predictor cannot learn one.
+        let mut rng = PlannerRng::new(7);
+        let pool: Vec<[f64; MAX_NODES]> = (0..256)
+            .map(|_| core::array::from_fn(|_| rng.uniform(PRIORITY_MIN, PRIORITY_MAX)))
+            .collect();
+        let mut d = Decoder::new();
+        let mut r = Route::new();
+        let mut k = 0;
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                k = (k + 1) & 255;
+                black_box(d.decode(&p, &pool[k], &mut r))
+            })
+        });
+    }
+    g.finish();
+}
+
+fn full_budget<S: Solver>(c: &mut Criterion, name: &str, iterations: u32, mut solver: S) {
+    let mut g = c.benchmark_group(name);
+    for n in SIZES {
+        let p = problem(n);
+        let mut seed = 0;
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                seed += 1;
+                let mut rng = PlannerRng::new(seed);
+                run(&mut solver, &p, &mut rng, None, Budget::iterations(iterations));
+                black_box(solver.best().1.weight)
+            })
+        });
+    }
+    g.finish();
+}
+
+fn pso(c: &mut Criterion) {
+    let s = PsoSettings::paper();
+    full_budget(c, "pso_full_budget", s.iterations, Pso::new(s));
+}
+
+fn bbo(c: &mut Criterion) {
+    let s = BboSettings::paper();
+    full_budget(c, "bbo_full_budget", s.generations, Bbo::new(s));
+}
+
+criterion_group!(benches, decode, pso, bbo);
 criterion_main!(benches);
