@@ -26,7 +26,7 @@
 //! times (AVX-512, AVX2, baseline) and picked at run time; all three compute
 //! exactly the same max, so routes do not depend on the machine.
 
-use crate::problem::{MAX_NODES, NodeSet, Problem};
+use crate::problem::{MAX_NODES, Problem};
 use crate::route::{Route, RouteEval};
 
 /// Lower end of the paper's priority range.
@@ -34,10 +34,10 @@ pub const PRIORITY_MIN: f64 = -200.0;
 /// Upper end of the paper's priority range.
 pub const PRIORITY_MAX: f64 = 100.0;
 
-/// Width of one step of the candidate scan, in nodes. Rows are scanned in
-/// whole blocks of this many (two AVX-512 vectors, so two independent max
-/// chains hide the latency); columns ≥ n read +∞ reach and key 0.
-pub const SCAN_BLOCK: usize = 16;
+/// Width of one step of the candidate scan, in nodes (one AVX-512 vector
+/// of `f64`). Rows are scanned in whole blocks; columns ≥ n read +∞ reach,
+/// so no scan takes them.
+pub const SCAN_BLOCK: usize = 8;
 
 const _: () = assert!(
     MAX_NODES.is_multiple_of(SCAN_BLOCK) && MAX_NODES <= 128,
@@ -57,10 +57,16 @@ pub const fn padded_len(n: usize) -> usize {
 /// lowest bits. Key 0.0 means "not a candidate" and is below every key.
 #[inline(always)]
 pub fn pack_key(p: f64, id: usize) -> f64 {
-    let p = if p.is_nan() { f64::NEG_INFINITY } else { p };
-    let b = p.to_bits();
-    // The classic monotone map of IEEE bits onto unsigned integers.
-    let mono = if (b as i64) < 0 { !b } else { b | (1 << 63) };
+    // Written with selects and shifts only, so a loop of these vectorises.
+    let b = if p.is_nan() {
+        f64::NEG_INFINITY.to_bits()
+    } else {
+        p.to_bits()
+    };
+    // The classic monotone map of IEEE bits onto unsigned integers:
+    // negative values flip every bit, others flip the sign bit.
+    let sign = ((b as i64) >> 63) as u64;
+    let mono = b ^ (sign | (1 << 63));
     // Two bits down keeps the exponent field below all-ones (finite, < 4);
     // adding 2^52 keeps the result normal (no subnormal slow paths).
     let k = ((mono >> 2) + (1 << 52)) & !0x7F;
@@ -104,6 +110,51 @@ fn best_key(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64, len: u
     acc[0]
 }
 
+/// [`best_key`] for AVX-512, written with intrinsics: visited nodes are a
+/// bit mask ANDed into the comparison mask (so the walk never stores into
+/// the key row it is about to load, which would stall store forwarding),
+/// and a masked max folds each block in one instruction. Same result as
+/// [`best_key`] on the same keys with visited keys zeroed.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn best_key_avx512(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64, len: usize, visited: u128) -> f64 {
+    use core::arch::x86_64::*;
+    debug_assert!(len <= MAX_NODES && len.is_multiple_of(SCAN_BLOCK));
+    let s = _mm512_set1_pd(slack);
+    // One block: lanes that are free and fit fold into `acc` by max.
+    #[inline(always)]
+    fn fold(
+        acc: __m512d,
+        reach: &[f64; MAX_NODES],
+        key: &[f64; MAX_NODES],
+        s: __m512d,
+        base: usize,
+        free: u8,
+    ) -> __m512d {
+        // SAFETY: the caller keeps base + 8 ≤ MAX_NODES, and AVX-512F is
+        // enabled in every caller (this is inlined into one).
+        unsafe {
+            let r = _mm512_loadu_pd(reach.as_ptr().add(base));
+            let m = _mm512_mask_cmp_pd_mask::<_CMP_LE_OQ>(free, r, s);
+            _mm512_mask_max_pd(acc, m, acc, _mm512_loadu_pd(key.as_ptr().add(base)))
+        }
+    }
+    // Two accumulators (even and odd blocks) halve the max chain's latency.
+    let (mut a0, mut a1) = (_mm512_setzero_pd(), _mm512_setzero_pd());
+    let mut base = 0;
+    while base + 2 * SCAN_BLOCK <= len {
+        let free = !(visited >> base) as u16;
+        a0 = fold(a0, reach, key, s, base, free as u8);
+        a1 = fold(a1, reach, key, s, base + SCAN_BLOCK, (free >> 8) as u8);
+        base += 2 * SCAN_BLOCK;
+    }
+    if base < len {
+        a0 = fold(a0, reach, key, s, base, !(visited >> base) as u8);
+    }
+    _mm512_reduce_max_pd(_mm512_max_pd(a0, a1))
+}
+
 /// Which compiled copy of the walk to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernel {
@@ -142,12 +193,19 @@ impl Kernel {
 
 /// Scratch space for decoding; build once, reuse for every decode.
 pub struct Decoder {
+    /// Packed priority keys of the decode in hand; 0 for visited nodes.
     key: [f64; MAX_NODES],
-    prefix_time_s: [f64; MAX_NODES],
-    /// Repair's reverse search (see [`Decoder::repair`]).
+    /// Figures of the route's first i edges, for i = 0..len.
+    prefix: [RouteEval; MAX_NODES],
+    /// Repair's A* search (see [`Decoder::astar_home`]).
     open: [f64; MAX_NODES],
     done: [f64; MAX_NODES],
-    succ: [u64; MAX_NODES],
+    order: [u64; MAX_NODES],
+    stamp: u64,
+    /// Nodes the last search settled, in order.
+    settled: [u8; MAX_NODES],
+    settled_len: usize,
+    path: [u8; MAX_NODES],
 }
 
 impl Default for Decoder {
@@ -161,10 +219,21 @@ impl Decoder {
     pub const fn new() -> Self {
         Self {
             key: [0.0; MAX_NODES],
-            prefix_time_s: [0.0; MAX_NODES],
+            prefix: [RouteEval {
+                time_s: 0.0,
+                distance_m: 0.0,
+                weight: 0.0,
+                risk_ratio_sum: 0.0,
+                tasks: 0,
+                feasible: false,
+            }; MAX_NODES],
             open: [0.0; MAX_NODES],
             done: [0.0; MAX_NODES],
-            succ: [0; MAX_NODES],
+            order: [0; MAX_NODES],
+            stamp: 0,
+            settled: [0; MAX_NODES],
+            settled_len: 0,
+            path: [0; MAX_NODES],
         }
     }
 
@@ -178,58 +247,77 @@ impl Decoder {
     /// [`Decoder::decode`] on a chosen kernel; a kernel this CPU lacks falls
     /// back to the portable one. Every kernel gives the same route.
     pub fn decode_with(&mut self, kernel: Kernel, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
-        let n = p.n();
-        for (c, (k, &pr)) in self.key[..n].iter_mut().zip(&priorities[..n]).enumerate() {
-            *k = pack_key(pr, c);
-        }
-        self.key[n..padded_len(n)].fill(0.0);
+        let priorities = &priorities[..p.n()];
         #[cfg(target_arch = "x86_64")]
         {
             let best = Kernel::detect();
             if kernel == Kernel::Avx512 && best == Kernel::Avx512 {
                 // SAFETY: the CPU has AVX-512F (checked just above).
-                return unsafe { self.walk_avx512(p, out) };
+                return unsafe { self.walk_avx512(p, priorities, out) };
             }
             if kernel != Kernel::Portable && best as u8 >= Kernel::Avx2 as u8 {
                 // SAFETY: the CPU has AVX2 (checked just above).
-                return unsafe { self.walk_avx2(p, out) };
+                return unsafe { self.walk_avx2(p, priorities, out) };
             }
         }
         let _ = kernel;
-        self.walk(p, out)
+        self.walk::<false>(p, priorities, out)
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    fn walk_avx512(&mut self, p: &Problem, out: &mut Route) -> RouteEval {
-        self.walk(p, out)
+    #[target_feature(enable = "avx512f,avx512dq,avx512vl")]
+    fn walk_avx512(&mut self, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
+        self.walk::<true>(p, priorities, out)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn walk_avx2(&mut self, p: &Problem, out: &mut Route) -> RouteEval {
-        self.walk(p, out)
+    fn walk_avx2(&mut self, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
+        self.walk::<false>(p, priorities, out)
     }
 
-    /// The greedy walk over the keys in `self.key`.
+    /// Packs the keys, then walks greedily over them. `AVX512`: scan with
+    /// [`best_key_avx512`] (visited as a bit mask) instead of zeroing the
+    /// keys of visited nodes for [`best_key`]. Keys in the padding (n..len)
+    /// are left as they are: their reach is +∞, so no scan ever takes them.
     #[inline(always)]
-    fn walk(&mut self, p: &Problem, out: &mut Route) -> RouteEval {
-        let len = padded_len(p.n());
+    fn walk<const AVX512: bool>(&mut self, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
+        let n = p.n();
+        let len = padded_len(n);
+        let (keys, prio) = (&mut self.key[..n], &priorities[..n]);
+        for c in 0..n {
+            keys[c] = pack_key(prio[c], c);
+        }
         let limit = p.budget_limit_s();
         let goal = p.goal();
 
         let mut cur = p.start();
         out.clear();
         out.push(cur);
-        self.key[cur] = 0.0;
+        let mut visited = 1u128 << cur;
+        if !AVX512 {
+            self.key[cur] = 0.0;
+        }
         let mut e = RouteEval {
             weight: p.prize(cur),
             ..RouteEval::default()
         };
-        self.prefix_time_s[0] = 0.0;
+        self.prefix[0] = e;
 
         while cur != goal {
-            let best = best_key(p.reach_row(cur), &self.key, limit - e.time_s, len);
+            let slack = limit - e.time_s;
+            let best = if AVX512 {
+                #[cfg(target_arch = "x86_64")]
+                {
+                    // SAFETY: only `walk_avx512` instantiates AVX512 = true,
+                    // and it runs only on CPUs with AVX-512F.
+                    unsafe { best_key_avx512(p.reach_row(cur), &self.key, slack, len, visited) }
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                unreachable!()
+            } else {
+                best_key(p.reach_row(cur), &self.key, slack, len)
+            };
             if best == 0.0 {
                 return self.repair(p, out);
             }
@@ -240,9 +328,12 @@ impl Decoder {
             e.weight += step.gain;
             e.risk_ratio_sum += step.risk_ratio;
             e.tasks += 1;
-            self.prefix_time_s[out.len()] = e.time_s;
+            self.prefix[out.len()] = e;
             out.push(next);
-            self.key[next] = 0.0;
+            visited |= 1 << next;
+            if !AVX512 {
+                self.key[next] = 0.0;
+            }
             cur = next;
         }
         e.feasible = e.time_s <= limit;
@@ -255,34 +346,21 @@ impl Decoder {
     /// left at r_k, and appends that path; if there is none, returns the
     /// quickest path from the start (over budget).
     ///
-    /// One reverse Dijkstra from the goal serves every k: it runs on the
-    /// graph without the route's nodes, settles only what the current
-    /// slack can use, and, as k steps back, unblocks r_k and carries on
-    /// with the larger slack. Unblocking r_k is consistent with the
-    /// settled region whenever r_k's distance exceeds everything settled so
-    /// far; otherwise the search restarts for the new graph (rare). Cost is
-    /// about one bounded Dijkstra however far back the cut goes.
+    /// Each r_k is tried with an A* search whose heuristic is the
+    /// unrestricted shortest time home (consistent, so each node settles
+    /// once and the path found is a quickest one) and which gives up as
+    /// soon as the best open estimate exceeds the time left, so it explores
+    /// only near-quickest paths.
     #[inline(always)]
     fn repair(&mut self, p: &Problem, out: &mut Route) -> RouteEval {
         let limit = p.budget_limit_s();
         let len = padded_len(p.n());
-        let mut blocked = p.excluded();
-        for node in out.iter() {
-            blocked.insert(node);
-        }
-        self.home_reset(p, blocked, len);
-        let mut settled_to = f64::NEG_INFINITY;
         let mut cut = None;
-        for k in (0..out.len()).rev() {
-            let r = out.get(k);
-            blocked.remove(r);
-            if !self.home_unblock(p, r, settled_to, len) {
-                self.home_reset(p, blocked, len);
-            }
-            let slack = limit - self.prefix_time_s[k];
-            self.home_advance(p, slack, len);
-            settled_to = slack;
-            if self.done[r] <= slack {
+        // k = last is skipped: its search would first relax exactly the
+        // sums T(r_k, c) + h(c) = reach(r_k, c) that the walk just found
+        // all over the slack, with the same blocked set, and fail.
+        for k in (0..out.len() - 1).rev() {
+            if self.astar_home(p, out, k, limit - self.prefix[k].time_s, len) {
                 cut = Some(k);
                 break;
             }
@@ -290,80 +368,110 @@ impl Decoder {
         let k = match cut {
             Some(k) => k,
             None => {
-                // Nothing fits: every node is unblocked now; finish the
-                // search and take the quickest path from the start.
-                self.home_advance(p, f64::INFINITY, len);
+                // Nothing fits: the quickest path from the start, over budget.
+                let found = self.astar_home(p, out, 0, f64::INFINITY, len);
+                debug_assert!(found, "Problem::finish guarantees the goal is reachable");
                 0
             }
         };
+        // Walk the settled tree back from the goal, then append in order.
+        let from = out.get(k);
+        let mut hops = 0;
+        let mut v = p.goal();
+        while v != from {
+            self.path[hops] = v as u8;
+            hops += 1;
+            v = self.astar_prev(p, v);
+        }
         out.truncate(k + 1);
-        let mut v = out.get(k);
-        while v != p.goal() {
-            v = self.succ[v] as usize;
+        let mut e = self.prefix[k];
+        let mut u = from;
+        for i in (0..hops).rev() {
+            let v = usize::from(self.path[i]);
+            let step = p.edge(u, v);
+            e.time_s += step.time_s;
+            e.distance_m += step.distance_m;
+            e.weight += step.gain;
+            e.risk_ratio_sum += step.risk_ratio;
+            e.tasks += 1;
             out.push(v);
+            u = v;
         }
-        p.evaluate(out).expect("repair builds a valid route by construction")
+        e.feasible = e.time_s <= limit;
+        debug_assert_eq!(p.evaluate(out), Some(e));
+        e
     }
 
-    /// Fresh reverse search from the goal on the graph without `blocked`.
-    /// `open[v]`: tentative time to the goal of an unsettled, unblocked node
-    /// (+∞ until reached), NaN for settled or blocked nodes so every
-    /// comparison skips them; `done[v]`: final time of settled nodes, +∞
-    /// otherwise.
+    /// A* from `route[k]` to the goal avoiding excluded nodes and
+    /// `route[..k]`; `true` when it reaches the goal within `slack`.
+    ///
+    /// `open[v]`: best time found from the source to an unsettled, allowed
+    /// node (+∞ until reached), NaN for settled or blocked nodes so every
+    /// comparison skips them. Settled nodes record their time in `done`
+    /// and a stamp in `order`, and are listed in `settled`.
     #[inline(always)]
-    fn home_reset(&mut self, p: &Problem, blocked: NodeSet, len: usize) {
+    fn astar_home(&mut self, p: &Problem, route: &Route, k: usize, slack: f64, len: usize) -> bool {
         let n = p.n();
-        for v in 0..len {
-            self.open[v] = if v < n && !blocked.contains(v) {
-                f64::INFINITY
-            } else {
-                f64::NAN
-            };
+        let goal = p.goal();
+        self.open[..n].fill(f64::INFINITY);
+        self.open[n..len].fill(f64::NAN);
+        for v in p.excluded().iter() {
+            self.open[v] = f64::NAN;
         }
-        self.done[..len].fill(f64::INFINITY);
-        self.open[p.goal()] = 0.0;
-    }
-
-    /// Makes `r` available again. Returns `false` when its time home is
-    /// within the settled region (`≤ settled_to`), where it could shorten
-    /// settled times; the caller then restarts the search.
-    #[inline(always)]
-    fn home_unblock(&mut self, p: &Problem, r: usize, settled_to: f64, len: usize) -> bool {
-        let row = &p.time_row(r)[..len];
-        let done = &self.done[..len];
-        let t = min_of(len, |v| row[v] + done[v]);
-        if t <= settled_to {
-            return false;
+        for &v in &route.as_bytes()[..k] {
+            self.open[usize::from(v)] = f64::NAN;
         }
-        self.open[r] = t;
-        if t < f64::INFINITY {
-            self.succ[r] = first_where(len, |v| row[v] + done[v] == t) as u64;
-        }
-        true
-    }
-
-    /// Settles every node whose time home is at most `bound`.
-    #[inline(always)]
-    fn home_advance(&mut self, p: &Problem, bound: f64, len: usize) {
+        self.open[route.get(k)] = 0.0;
+        self.settled_len = 0;
+        let h = p.to_goal_row();
         loop {
+            // Pop the least estimate g + h; the node id rides in the low
+            // bits of the key (ties within ~1e-13 relative go to the lower
+            // id), and NaN (settled, blocked, or +∞ + id bits) never wins.
             let open = &self.open;
-            let m = min_of(len, |v| open[v]);
-            // +∞: nothing left that can reach the goal.
-            if !(m <= bound && m < f64::INFINITY) {
-                return;
+            let best = min_of(len, |v| {
+                let f = open[v] + h[v];
+                f64::from_bits(f.to_bits() & !0x7F | v as u64)
+            });
+            // +∞ (only node 0's key can be +∞ rather than NaN): unreachable.
+            if !(best <= slack && best < f64::INFINITY) {
+                return false;
             }
-            let u = first_where(len, |v| open[v] == m);
-            self.done[u] = m;
+            let u = (best.to_bits() & 0x7F) as usize;
+            let g = self.open[u];
+            self.done[u] = g;
+            self.order[u] = self.stamp;
+            self.stamp += 1;
+            self.settled[self.settled_len] = u as u8;
+            self.settled_len += 1;
+            if u == goal {
+                return true;
+            }
             self.open[u] = f64::NAN;
             let row = &p.time_row(u)[..len];
-            let (open, succ) = (&mut self.open[..len], &mut self.succ[..len]);
+            let open = &mut self.open[..len];
             for v in 0..len {
-                let cand = m + row[v];
-                let better = cand < open[v];
-                open[v] = if better { cand } else { open[v] };
-                succ[v] = if better { u as u64 } else { succ[v] };
+                let cand = g + row[v];
+                open[v] = if cand < open[v] { cand } else { open[v] };
             }
         }
+    }
+
+    /// The node before `v` on the last search's path: a node settled
+    /// earlier in that search whose time plus the edge is exactly `v`'s
+    /// (the node that set `v`'s time qualifies; settle order rules out
+    /// cycles even across zero-time edges).
+    #[inline(always)]
+    fn astar_prev(&self, p: &Problem, v: usize) -> usize {
+        let row = p.time_row(v);
+        let (dv, ov) = (self.done[v], self.order[v]);
+        for &u in &self.settled[..self.settled_len] {
+            let u = usize::from(u);
+            if self.order[u] < ov && self.done[u] + row[u] == dv {
+                return u;
+            }
+        }
+        unreachable!("the node that set a settled node's time was settled before it")
     }
 }
 
@@ -393,17 +501,12 @@ fn min_of(len: usize, f: impl Fn(usize) -> f64) -> f64 {
     acc[0]
 }
 
-/// First index in `0..len` where `pred` holds (the caller knows one does).
-#[inline(always)]
-fn first_where(len: usize, pred: impl Fn(usize) -> bool) -> usize {
-    (0..len).find(|&v| pred(v)).unwrap_or(0)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::fixtures::{line_instance, random_instance};
     use crate::instance::{Edge, Instance, Node, Objective};
+    use crate::problem::NodeSet;
     use proptest::prelude::*;
 
     #[test]

@@ -450,6 +450,12 @@ impl Problem {
     pub fn to_goal_s(&self, u: usize) -> f64 {
         self.to_goal_s[u]
     }
+    /// Shortest time from every node to the goal, s (first `n` entries
+    /// meaningful; the rest may be stale).
+    #[inline]
+    pub(crate) fn to_goal_row(&self) -> &[f64; MAX_NODES] {
+        &self.to_goal_s
+    }
     /// Row `u` of the look-ahead table (first `n` entries meaningful).
     #[inline]
     pub fn reach_row(&self, u: usize) -> &[f64; MAX_NODES] {

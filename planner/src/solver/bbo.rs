@@ -38,7 +38,7 @@
 use core::cmp::Ordering;
 
 use super::Solver;
-use super::lanes::{LaneRng, threshold};
+use super::lanes::LaneRng;
 use super::pso::{unit_from_bits, warm_count, warm_vector};
 use crate::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN, padded_len};
 use crate::problem::{MAX_NODES, Problem};
@@ -89,11 +89,16 @@ pub struct Bbo {
     order: Vec<usize>,
     /// Per habitat: (score, route time) for ranking.
     rank_key: Vec<(f64, f64)>,
-    /// By rank: cumulative emigration μ_0 + … + μ_r.
-    mu_cumulative: Vec<f64>,
-    /// By rank: immigration λ_r and mutation m_r as 32-bit thresholds.
-    immigrate_below: Vec<u64>,
-    mutate_below: Vec<u64>,
+    /// Roulette on μ by rank as a Walker/Vose alias table: bucket b keeps
+    /// rank b when a 16-bit coin is below `alias_keep[b]`, else takes
+    /// `alias_other[b]`.
+    alias_keep: Vec<u32>,
+    alias_other: Vec<u32>,
+    /// By rank: immigration λ_r and mutation m_r as 16-bit thresholds.
+    immigrate_below: Vec<u32>,
+    mutate_below: Vec<u32>,
+    /// Random words for the habitat being changed (two per dimension).
+    words: Vec<u64>,
     scratch: Route,
     best: Route,
     best_eval: RouteEval,
@@ -110,17 +115,12 @@ impl Bbo {
             ..settings
         };
         let n_f = habitats as f64;
-        let mu = |r: usize| (n_f - r as f64) / (n_f + 1.0);
-        let mut mu_cumulative = Vec::with_capacity(habitats);
-        let mut sum = 0.0;
-        for r in 0..habitats {
-            sum += mu(r);
-            mu_cumulative.push(sum);
-        }
-        let immigrate_below = (0..habitats).map(|r| threshold(1.0 - mu(r))).collect();
+        let mu: Vec<f64> = (0..habitats).map(|r| (n_f - r as f64) / (n_f + 1.0)).collect();
+        let (alias_keep, alias_other) = alias_table(&mu);
+        let immigrate_below = mu.iter().map(|m| threshold16(1.0 - m)).collect();
         let mutate_below = species_mutation_rates(habitats, settings.max_mutation_rate)
             .into_iter()
-            .map(threshold)
+            .map(threshold16)
             .collect();
         let cells = habitats * MAX_NODES;
         Self {
@@ -134,9 +134,11 @@ impl Bbo {
             eval: vec![RouteEval::default(); habitats],
             order: (0..habitats).collect(),
             rank_key: vec![(0.0, 0.0); habitats],
-            mu_cumulative,
+            alias_keep,
+            alias_other,
             immigrate_below,
             mutate_below,
+            words: vec![0; 2 * MAX_NODES],
             scratch: Route::new(),
             best: Route::new(),
             best_eval: RouteEval::default(),
@@ -174,16 +176,37 @@ impl Bbo {
                 .then(a.cmp(&b))
         });
     }
+}
 
-    /// Rank (0 = best) of the source habitat picked by roulette on μ.
-    #[inline]
-    fn roulette(&mut self) -> usize {
-        let total = self.mu_cumulative[self.mu_cumulative.len() - 1];
-        let u = unit_from_bits(self.lanes.next_u32()) * total;
-        self.mu_cumulative
-            .partition_point(|&c| c <= u)
-            .min(self.mu_cumulative.len() - 1)
+/// Probability `p` ∈ [0, 1] as a threshold on a 16-bit draw (`draw < t`
+/// has probability `p` to 2^-16, ample for rates like 1/51 or 0.1).
+fn threshold16(p: f64) -> u32 {
+    (p.clamp(0.0, 1.0) * 65_536.0).round() as u32
+}
+
+/// Walker/Vose alias table for sampling index i with probability
+/// ∝ `weights[i]`: draw a bucket b uniformly and a 16-bit coin c; take b
+/// when c < keep[b], else other[b]. Built with plain arithmetic in a fixed
+/// order, so the table (and every draw) is the same on every machine.
+fn alias_table(weights: &[f64]) -> (Vec<u32>, Vec<u32>) {
+    let k = weights.len();
+    let total: f64 = weights.iter().sum();
+    let mut scaled: Vec<f64> = weights.iter().map(|w| w * k as f64 / total).collect();
+    let mut keep = vec![65_536u32; k];
+    let mut other: Vec<u32> = (0..k as u32).collect();
+    let mut small: Vec<usize> = (0..k).filter(|&i| scaled[i] < 1.0).collect();
+    let mut large: Vec<usize> = (0..k).filter(|&i| scaled[i] >= 1.0).collect();
+    while let (Some(s), Some(&l)) = (small.pop(), large.last()) {
+        keep[s] = threshold16(scaled[s]);
+        other[s] = l as u32;
+        scaled[l] -= 1.0 - scaled[s];
+        if scaled[l] < 1.0 {
+            large.pop();
+            small.push(l);
+        }
     }
+    // Leftovers (rounding) keep their own bucket.
+    (keep, other)
 }
 
 /// Simon's species-count mutation rates by rank (0 = best):
@@ -260,18 +283,38 @@ impl Solver for Bbo {
         let habitats = self.settings.habitats;
         self.old[..habitats * stride].copy_from_slice(&self.pop[..habitats * stride]);
         let range = PRIORITY_MAX - PRIORITY_MIN;
+        let buckets = habitats as u64;
+        // Locals, so the stores into `pop` cannot make the compiler reload
+        // (and re-check) the tables on every dimension.
+        let (keep, other) = (&self.alias_keep[..habitats], &self.alias_other[..habitats]);
+        let (order, old) = (&self.order[..habitats], &self.old[..habitats * stride]);
         for r in self.settings.elites..habitats {
-            let h = self.order[r];
+            let h = order[r];
             let (immigrate, mutate) = (self.immigrate_below[r], self.mutate_below[r]);
-            for d in 0..n {
-                if u64::from(self.lanes.next_u32()) < immigrate {
-                    let rank = self.roulette();
-                    let src = self.order[rank];
-                    self.pop[h * stride + d] = self.old[src * stride + d];
-                }
-                if u64::from(self.lanes.next_u32()) < mutate {
-                    self.pop[h * stride + d] = PRIORITY_MIN + range * unit_from_bits(self.lanes.next_u32());
-                }
+            let words = &mut self.words[..2 * stride];
+            self.lanes.fill(words);
+            let row = &mut self.pop[h * stride..h * stride + n];
+            // Branch-free per dimension: word a holds the immigration test
+            // (bits 0–15), the mutation test (16–31), the alias coin
+            // (32–47) and the alias bucket (48–63, multiply-shift onto
+            // 0..N); word b is the mutated value.
+            for (d, (x, w)) in row.iter_mut().zip(words.chunks_exact(2)).enumerate() {
+                let (a, b) = (w[0], w[1]);
+                let bucket = (((a >> 48) * buckets) >> 16) as usize;
+                let coin = ((a >> 32) & 0xFFFF) as u32;
+                let rank = if coin < keep[bucket] {
+                    bucket
+                } else {
+                    other[bucket] as usize
+                };
+                let source = old[order[rank] * stride + d];
+                let moved = if ((a & 0xFFFF) as u32) < immigrate { source } else { *x };
+                let fresh = PRIORITY_MIN + range * unit_from_bits(b as u32);
+                *x = if (((a >> 16) & 0xFFFF) as u32) < mutate {
+                    fresh
+                } else {
+                    moved
+                };
             }
         }
         for r in self.settings.elites..habitats {
@@ -292,16 +335,24 @@ mod tests {
     use super::*;
 
     #[test]
-    fn rates_follow_rank() {
+    fn rates_follow_rank_and_the_roulette_follows_mu() {
         let b = Bbo::new(BboSettings::paper());
-        // μ by rank: 50/51 down to 1/51, all in (0, 1); λ = 1 − μ.
-        let mu: Vec<f64> = (0..50)
-            .map(|r| b.mu_cumulative[r] - if r == 0 { 0.0 } else { b.mu_cumulative[r - 1] })
-            .collect();
-        assert!((mu[0] - 50.0 / 51.0).abs() < 1e-12);
-        assert!((mu[49] - 1.0 / 51.0).abs() < 1e-12);
-        assert!(mu.windows(2).all(|w| w[0] > w[1]));
+        // λ by rank rises from 1/51 to 50/51 (as 16-bit thresholds).
+        assert_eq!(b.immigrate_below[0], threshold16(1.0 / 51.0));
+        assert_eq!(b.immigrate_below[49], threshold16(50.0 / 51.0));
         assert!(b.immigrate_below.windows(2).all(|w| w[0] < w[1]));
+        // The alias table reproduces μ_r / Σμ = (50 − r) / 1275 exactly
+        // enough: tally its probability mass per rank.
+        let mut mass = [0.0f64; 50];
+        for bucket in 0..50 {
+            let keep = f64::from(b.alias_keep[bucket]) / 65_536.0;
+            mass[bucket] += keep / 50.0;
+            mass[b.alias_other[bucket] as usize] += (1.0 - keep) / 50.0;
+        }
+        for (r, m) in mass.iter().enumerate() {
+            let want = (50 - r) as f64 / 1275.0;
+            assert!((m - want).abs() < 1e-4, "rank {r}: {m} vs {want}");
+        }
     }
 
     #[test]

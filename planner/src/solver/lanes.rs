@@ -192,13 +192,6 @@ mod simd {
     }
 }
 
-/// Probability `p` ∈ [0, 1] as a threshold on a 32-bit draw: `draw < t`
-/// happens with probability `p` (to 2^-32).
-#[inline]
-pub(crate) fn threshold(p: f64) -> u64 {
-    (p.clamp(0.0, 1.0) * 4_294_967_296.0) as u64
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -273,16 +266,5 @@ mod tests {
         let mut c = LaneRng::new();
         c.seed(&mut PlannerRng::new(10));
         assert_ne!(c.next_block(), a.next_block());
-    }
-
-    #[test]
-    fn thresholds_hit_their_probability() {
-        let mut r = LaneRng::new();
-        r.seed(&mut PlannerRng::new(1));
-        let t = threshold(0.1);
-        let hits = (0..100_000).filter(|_| u64::from(r.next_u32()) < t).count();
-        assert!((9_500..10_500).contains(&hits), "{hits}");
-        assert_eq!(threshold(0.0), 0);
-        assert_eq!(threshold(1.0), 1 << 32);
     }
 }
