@@ -29,6 +29,34 @@
 use crate::problem::{MAX_NODES, Problem};
 use crate::route::{Route, RouteEval};
 
+/// A priority value the decoder accepts: `f64`, or `f32` (widened exactly,
+/// so an `f32` vector decodes exactly like its `f64` copy; the PSO keeps
+/// its swarm in `f32` for twice the SIMD width).
+pub trait Priority: Copy + private::Sealed {
+    /// The value as `f64` (exact).
+    fn to_f64(self) -> f64;
+}
+
+impl Priority for f64 {
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl Priority for f32 {
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+}
+
+mod private {
+    pub trait Sealed {}
+    impl Sealed for f64 {}
+    impl Sealed for f32 {}
+}
+
 /// Lower end of the paper's priority range.
 pub const PRIORITY_MIN: f64 = -200.0;
 /// Upper end of the paper's priority range.
@@ -182,6 +210,13 @@ impl Kernel {
         Self::Portable
     }
 
+    /// This kernel if the CPU runs it, else the portable one.
+    #[inline]
+    pub fn usable(self) -> Self {
+        let best = Self::detect();
+        if self as u8 <= best as u8 { self } else { Self::Portable }
+    }
+
     /// Every kernel this CPU runs (for tests that hold them equal).
     pub fn available() -> impl Iterator<Item = Self> {
         let best = Self::detect();
@@ -189,6 +224,69 @@ impl Kernel {
             .into_iter()
             .filter(move |k| *k as u8 <= best as u8)
     }
+}
+
+/// Where a greedy walk stands.
+struct Walk {
+    cur: usize,
+    visited: u128,
+    /// Figures of the route so far.
+    e: RouteEval,
+    running: bool,
+    dead_end: bool,
+}
+
+#[inline(always)]
+fn walk_pair<const AVX512: bool, P: Priority>(
+    da: &mut Decoder,
+    db: &mut Decoder,
+    p: &Problem,
+    a: &[P],
+    b: &[P],
+    out_a: &mut Route,
+    out_b: &mut Route,
+) -> (RouteEval, RouteEval) {
+    let mut wa = da.begin::<AVX512, P>(p, a, out_a);
+    let mut wb = db.begin::<AVX512, P>(p, b, out_b);
+    while wa.running && wb.running {
+        da.step::<AVX512>(p, &mut wa, out_a);
+        db.step::<AVX512>(p, &mut wb, out_b);
+    }
+    while wa.running {
+        da.step::<AVX512>(p, &mut wa, out_a);
+    }
+    while wb.running {
+        db.step::<AVX512>(p, &mut wb, out_b);
+    }
+    (da.finish(p, &wa, out_a), db.finish(p, &wb, out_b))
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl")]
+fn walk_pair_avx512<P: Priority>(
+    da: &mut Decoder,
+    db: &mut Decoder,
+    p: &Problem,
+    a: &[P],
+    b: &[P],
+    out_a: &mut Route,
+    out_b: &mut Route,
+) -> (RouteEval, RouteEval) {
+    walk_pair::<true, P>(da, db, p, a, b, out_a, out_b)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn walk_pair_avx2<P: Priority>(
+    da: &mut Decoder,
+    db: &mut Decoder,
+    p: &Problem,
+    a: &[P],
+    b: &[P],
+    out_a: &mut Route,
+    out_b: &mut Route,
+) -> (RouteEval, RouteEval) {
+    walk_pair::<false, P>(da, db, p, a, b, out_a, out_b)
 }
 
 /// Scratch space for decoding; build once, reuse for every decode.
@@ -240,103 +338,160 @@ impl Decoder {
     /// Decodes `priorities` (at least `p.n()` values) into `out` and returns
     /// the route's figures.
     #[inline]
-    pub fn decode(&mut self, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
+    pub fn decode<P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> RouteEval {
         self.decode_with(Kernel::detect(), p, priorities, out)
     }
 
     /// [`Decoder::decode`] on a chosen kernel; a kernel this CPU lacks falls
     /// back to the portable one. Every kernel gives the same route.
-    pub fn decode_with(&mut self, kernel: Kernel, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
+    pub fn decode_with<P: Priority>(
+        &mut self,
+        kernel: Kernel,
+        p: &Problem,
+        priorities: &[P],
+        out: &mut Route,
+    ) -> RouteEval {
         let priorities = &priorities[..p.n()];
-        #[cfg(target_arch = "x86_64")]
-        {
-            let best = Kernel::detect();
-            if kernel == Kernel::Avx512 && best == Kernel::Avx512 {
-                // SAFETY: the CPU has AVX-512F (checked just above).
-                return unsafe { self.walk_avx512(p, priorities, out) };
-            }
-            if kernel != Kernel::Portable && best as u8 >= Kernel::Avx2 as u8 {
-                // SAFETY: the CPU has AVX2 (checked just above).
-                return unsafe { self.walk_avx2(p, priorities, out) };
-            }
+        match kernel.usable() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `usable` only yields Avx512 on CPUs with AVX-512F.
+            Kernel::Avx512 => unsafe { self.walk_avx512(p, priorities, out) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `usable` only yields Avx2 on CPUs with AVX2.
+            Kernel::Avx2 => unsafe { self.walk_avx2(p, priorities, out) },
+            _ => self.walk::<false, P>(p, priorities, out),
         }
-        let _ = kernel;
-        self.walk::<false>(p, priorities, out)
+    }
+
+    /// Decodes two vectors with two decoders at once: the two greedy walks
+    /// advance in lock-step, so the processor overlaps their (otherwise
+    /// serial) scan → pick → next-row chains. Exactly the results of
+    /// `self.decode(p, a, out_a)` and `other.decode(p, b, out_b)`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub fn decode_pair<P: Priority>(
+        &mut self,
+        other: &mut Decoder,
+        p: &Problem,
+        a: &[P],
+        b: &[P],
+        out_a: &mut Route,
+        out_b: &mut Route,
+    ) -> (RouteEval, RouteEval) {
+        let (a, b) = (&a[..p.n()], &b[..p.n()]);
+        match Kernel::detect() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `detect` only yields Avx512 on CPUs with AVX-512F.
+            Kernel::Avx512 => unsafe { walk_pair_avx512(self, other, p, a, b, out_a, out_b) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `detect` only yields Avx2 on CPUs with AVX2.
+            Kernel::Avx2 => unsafe { walk_pair_avx2(self, other, p, a, b, out_a, out_b) },
+            _ => walk_pair::<false, P>(self, other, p, a, b, out_a, out_b),
+        }
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-    fn walk_avx512(&mut self, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
-        self.walk::<true>(p, priorities, out)
+    fn walk_avx512<P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> RouteEval {
+        self.walk::<true, P>(p, priorities, out)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn walk_avx2(&mut self, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
-        self.walk::<false>(p, priorities, out)
+    fn walk_avx2<P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> RouteEval {
+        self.walk::<false, P>(p, priorities, out)
     }
 
-    /// Packs the keys, then walks greedily over them. `AVX512`: scan with
-    /// [`best_key_avx512`] (visited as a bit mask) instead of zeroing the
-    /// keys of visited nodes for [`best_key`]. Keys in the padding (n..len)
-    /// are left as they are: their reach is +∞, so no scan ever takes them.
+    /// Packs the keys, then walks greedily over them.
     #[inline(always)]
-    fn walk<const AVX512: bool>(&mut self, p: &Problem, priorities: &[f64], out: &mut Route) -> RouteEval {
+    fn walk<const AVX512: bool, P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> RouteEval {
+        let mut w = self.begin::<AVX512, P>(p, priorities, out);
+        while w.running {
+            self.step::<AVX512>(p, &mut w, out);
+        }
+        self.finish(p, &w, out)
+    }
+
+    /// Packs the keys and puts the walk on the start. `AVX512`: visited
+    /// nodes are tracked only as a bit mask for [`best_key_avx512`];
+    /// otherwise their keys are also zeroed for [`best_key`]. Keys in the
+    /// padding (n..len) are left as they are: their reach is +∞, so no scan
+    /// ever takes them.
+    #[inline(always)]
+    fn begin<const AVX512: bool, P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> Walk {
         let n = p.n();
-        let len = padded_len(n);
         let (keys, prio) = (&mut self.key[..n], &priorities[..n]);
         for c in 0..n {
-            keys[c] = pack_key(prio[c], c);
+            keys[c] = pack_key(prio[c].to_f64(), c);
         }
-        let limit = p.budget_limit_s();
-        let goal = p.goal();
-
-        let mut cur = p.start();
+        let cur = p.start();
         out.clear();
         out.push(cur);
-        let mut visited = 1u128 << cur;
         if !AVX512 {
             self.key[cur] = 0.0;
         }
-        let mut e = RouteEval {
+        let e = RouteEval {
             weight: p.prize(cur),
             ..RouteEval::default()
         };
         self.prefix[0] = e;
-
-        while cur != goal {
-            let slack = limit - e.time_s;
-            let best = if AVX512 {
-                #[cfg(target_arch = "x86_64")]
-                {
-                    // SAFETY: only `walk_avx512` instantiates AVX512 = true,
-                    // and it runs only on CPUs with AVX-512F.
-                    unsafe { best_key_avx512(p.reach_row(cur), &self.key, slack, len, visited) }
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                unreachable!()
-            } else {
-                best_key(p.reach_row(cur), &self.key, slack, len)
-            };
-            if best == 0.0 {
-                return self.repair(p, out);
-            }
-            let next = key_id(best);
-            let step = p.edge(cur, next);
-            e.time_s += step.time_s;
-            e.distance_m += step.distance_m;
-            e.weight += step.gain;
-            e.risk_ratio_sum += step.risk_ratio;
-            e.tasks += 1;
-            self.prefix[out.len()] = e;
-            out.push(next);
-            visited |= 1 << next;
-            if !AVX512 {
-                self.key[next] = 0.0;
-            }
-            cur = next;
+        Walk {
+            cur,
+            visited: 1u128 << cur,
+            e,
+            running: cur != p.goal(),
+            dead_end: false,
         }
-        e.feasible = e.time_s <= limit;
+    }
+
+    /// One greedy step: the highest-key neighbour that fits, or a dead end.
+    #[inline(always)]
+    fn step<const AVX512: bool>(&mut self, p: &Problem, w: &mut Walk, out: &mut Route) {
+        let len = padded_len(p.n());
+        let slack = p.budget_limit_s() - w.e.time_s;
+        let best = if AVX512 {
+            #[cfg(target_arch = "x86_64")]
+            {
+                // SAFETY: only the `*_avx512` walks instantiate AVX512 =
+                // true, and they run only on CPUs with AVX-512F.
+                unsafe { best_key_avx512(p.reach_row(w.cur), &self.key, slack, len, w.visited) }
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            unreachable!()
+        } else {
+            best_key(p.reach_row(w.cur), &self.key, slack, len)
+        };
+        if best == 0.0 {
+            w.running = false;
+            w.dead_end = true;
+            return;
+        }
+        let next = key_id(best);
+        let edge = p.edge(w.cur, next);
+        let e = &mut w.e;
+        e.time_s += edge.time_s;
+        e.distance_m += edge.distance_m;
+        e.weight += edge.gain;
+        e.risk_ratio_sum += edge.risk_ratio;
+        e.tasks += 1;
+        self.prefix[out.len()] = *e;
+        out.push(next);
+        w.visited |= 1 << next;
+        if !AVX512 {
+            self.key[next] = 0.0;
+        }
+        w.cur = next;
+        w.running = next != p.goal();
+    }
+
+    /// The figures of a finished walk, repairing a dead end.
+    #[inline(always)]
+    fn finish(&mut self, p: &Problem, w: &Walk, out: &mut Route) -> RouteEval {
+        if w.dead_end {
+            return self.repair(p, out);
+        }
+        let mut e = w.e;
+        e.feasible = e.time_s <= p.budget_limit_s();
         debug_assert_eq!(p.evaluate(out), Some(e));
         e
     }
@@ -772,6 +927,14 @@ mod tests {
                 prop_assert_eq!(e2, e);
             }
             prop_assert_eq!(reference_decode(&p, &raw), r.to_vec());
+            // Paired decoding gives each vector's own result.
+            let flipped: Vec<f64> = raw.iter().rev().copied().collect();
+            let mut r2 = Route::new();
+            let e2 = Decoder::new().decode(&p, &flipped, &mut r2);
+            let (mut pa, mut pb) = (Route::new(), Route::new());
+            let (ea, eb) = Decoder::new().decode_pair(&mut Decoder::new(), &p, &raw, &flipped, &mut pa, &mut pb);
+            prop_assert_eq!((pa.as_bytes(), pb.as_bytes()), (r.as_bytes(), r2.as_bytes()));
+            prop_assert_eq!((ea, eb), (e, e2));
             let checked = p.evaluate(&r);
             prop_assert_eq!(checked, Some(e));
             let stats = crate::route::RouteStats::from_instance(&inst, &r.to_vec()).unwrap();
