@@ -91,6 +91,23 @@ pub trait Solver {
     fn best(&self) -> (&Route, &RouteEval);
 }
 
+/// A boxed solver is a solver (so `Algorithm::build`'s boxes go wherever a
+/// `S: Solver` does, e.g. the generic conformance suite).
+impl<S: Solver + ?Sized> Solver for Box<S> {
+    fn name(&self) -> &'static str {
+        (**self).name()
+    }
+    fn start(&mut self, problem: &Problem, rng: &mut PlannerRng, warm: Option<&Route>) {
+        (**self).start(problem, rng, warm)
+    }
+    fn step(&mut self, problem: &Problem, rng: &mut PlannerRng) -> bool {
+        (**self).step(problem, rng)
+    }
+    fn best(&self) -> (&Route, &RouteEval) {
+        (**self).best()
+    }
+}
+
 /// Figures every real route beats under [`Problem::better`] (infeasible
 /// with infinite time), the best-so-far before the first decode.
 pub(crate) const WORST: RouteEval = RouteEval {
