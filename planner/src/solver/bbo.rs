@@ -32,7 +32,7 @@
 //! re-evaluation; warm start as in the PSO: a tenth of the habitats (5 of
 //! 50) start on or near a vector that decodes to the warm route, and the
 //! warm route is evaluated directly so a warm solve is never worse than it.
-//! Random draws come from eight xoshiro256++ lanes seeded from the caller's
+//! Random draws come from sixteen xoshiro256++ lanes seeded from the caller's
 //! `PlannerRng` (see `lanes.rs`).
 
 use core::cmp::Ordering;
@@ -76,7 +76,9 @@ const WARM_NOISE_FRACTION: f64 = 0.1;
 /// A BBO solver with every buffer allocated up front.
 pub struct Bbo {
     settings: BboSettings,
+    /// Two decoders, so habitats decode in pairs.
     decoder: Decoder,
+    decoder_b: Decoder,
     lanes: LaneRng,
     n: usize,
     stride: usize,
@@ -100,6 +102,7 @@ pub struct Bbo {
     /// Random words for the habitat being changed (two per dimension).
     words: Vec<u64>,
     scratch: Route,
+    scratch_b: Route,
     best: Route,
     best_eval: RouteEval,
 }
@@ -126,6 +129,7 @@ impl Bbo {
         Self {
             settings,
             decoder: Decoder::new(),
+            decoder_b: Decoder::new(),
             lanes: LaneRng::new(),
             n: 0,
             stride: 0,
@@ -140,6 +144,7 @@ impl Bbo {
             mutate_below,
             words: vec![0; 2 * MAX_NODES],
             scratch: Route::new(),
+            scratch_b: Route::new(),
             best: Route::new(),
             best_eval: RouteEval::default(),
         }
@@ -160,6 +165,27 @@ impl Bbo {
         if problem.better(&e, &self.best_eval) {
             self.best = self.scratch;
             self.best_eval = e;
+        }
+    }
+
+    /// [`Bbo::evaluate`] for habitats `a` then `b`, decoded together.
+    fn evaluate_pair(&mut self, problem: &Problem, a: usize, b: usize) {
+        let s = self.stride;
+        let (ea, eb) = self.decoder.decode_pair(
+            &mut self.decoder_b,
+            problem,
+            &self.pop[a * s..(a + 1) * s],
+            &self.pop[b * s..(b + 1) * s],
+            &mut self.scratch,
+            &mut self.scratch_b,
+        );
+        for (h, e, second) in [(a, ea, false), (b, eb, true)] {
+            self.eval[h] = e;
+            self.rank_key[h] = (problem.score(&e), e.time_s);
+            if problem.better(&e, &self.best_eval) {
+                self.best = if second { self.scratch_b } else { self.scratch };
+                self.best_eval = e;
+            }
         }
     }
 
@@ -317,7 +343,15 @@ impl Solver for Bbo {
                 };
             }
         }
-        for r in self.settings.elites..habitats {
+        // Decode the changed habitats two at a time (see
+        // `Decoder::decode_pair`), taking results in rank order.
+        let mut r = self.settings.elites;
+        while r + 1 < habitats {
+            let (ha, hb) = (self.order[r], self.order[r + 1]);
+            self.evaluate_pair(problem, ha, hb);
+            r += 2;
+        }
+        if r < habitats {
             let h = self.order[r];
             self.evaluate(problem, h);
         }

@@ -1,22 +1,23 @@
-//! Eight interleaved xoshiro256++ streams for the solvers' bulk draws.
+//! Sixteen interleaved xoshiro256++ streams for the solvers' bulk draws.
 //!
 //! Contract: a [`LaneRng`] is seeded from the caller's
 //! [`PlannerRng`](crate::rng::PlannerRng) (32 draws) at the start of every
 //! solve, so every number it yields is fixed by the user's seed; it never
 //! touches another source. It exists for speed: a PSO generation on 128
-//! nodes needs ~40 000 uniforms, and eight independent states stepped in
+//! nodes needs ~40 000 uniforms, and sixteen independent states stepped in
 //! lock-step let the compiler run them as one vector (issue 2 §7: "a fast
-//! seeded RNG"), where one xoshiro state is a serial dependency chain. Each
+//! seeded RNG"), where one xoshiro state is a serial dependency chain (two
+//! vectors of eight lanes give the core two chains to overlap). Each
 //! lane is the same algorithm as `PlannerRng` (Blackman & Vigna, ACM TOMS
 //! 2021); lanes are seeded by independent 64-bit draws, which for a
 //! 2^256-period generator makes overlap negligible.
 
 use crate::rng::PlannerRng;
 
-/// Number of interleaved streams (one AVX-512 vector of `u64`).
-pub(crate) const LANES: usize = 8;
+/// Number of interleaved streams (two AVX-512 vectors of `u64`).
+pub(crate) const LANES: usize = 16;
 
-/// Eight xoshiro256++ states, word-major so each step is a vector op.
+/// Sixteen xoshiro256++ states, word-major so each step is vector ops.
 #[derive(Clone, Debug)]
 pub(crate) struct LaneRng {
     s: [[u64; LANES]; 4],
@@ -35,7 +36,7 @@ impl LaneRng {
         }
     }
 
-    /// Reseeds every lane from `rng` (32 draws) and drops buffered values.
+    /// Reseeds every lane from `rng` (64 draws) and drops buffered values.
     pub(crate) fn seed(&mut self, rng: &mut PlannerRng) {
         for lane in 0..LANES {
             for word in 0..4 {
@@ -50,7 +51,7 @@ impl LaneRng {
         self.used = 2 * LANES;
     }
 
-    /// One step of every lane: eight 64-bit outputs.
+    /// One step of every lane: sixteen 64-bit outputs.
     #[inline(always)]
     pub(crate) fn next_block(&mut self) -> [u64; LANES] {
         let [s0, s1, s2, s3] = &mut self.s;
@@ -69,7 +70,7 @@ impl LaneRng {
     }
 
     /// Fills `out` (a whole number of blocks) with random words, block by
-    /// block: `out[8j + l]` is lane l's j-th output, exactly as repeated
+    /// block: `out[16j + l]` is lane l's j-th output, exactly as repeated
     /// [`LaneRng::next_block`] calls would give. Uses AVX-512 or AVX2 when
     /// the CPU has them (the same integer operations, so the same words).
     #[inline]
@@ -122,27 +123,41 @@ mod simd {
 
     use super::LANES;
 
-    /// AVX-512: one register per state word holds all eight lanes.
+    /// AVX-512: two registers per state word (lanes 0–7 and 8–15).
     #[target_feature(enable = "avx512f")]
     pub(super) fn fill_avx512(s: &mut [[u64; LANES]; 4], out: &mut [u64]) {
-        // SAFETY: every pointer below comes from a `[u64; 8]` or an 8-word
-        // chunk, and unaligned loads/stores are used throughout.
+        // SAFETY: every pointer below comes from a `[u64; 16]` row or a
+        // 16-word chunk at offset 0 or 8, and unaligned loads/stores are
+        // used throughout.
         unsafe {
-            let ld = |w: &[u64; LANES]| _mm512_loadu_si512(w.as_ptr().cast());
-            let (mut s0, mut s1, mut s2, mut s3) = (ld(&s[0]), ld(&s[1]), ld(&s[2]), ld(&s[3]));
-            for chunk in out.chunks_exact_mut(LANES) {
-                let r = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
-                _mm512_storeu_si512(chunk.as_mut_ptr().cast(), r);
-                let t = _mm512_slli_epi64::<17>(s1);
-                s2 = _mm512_xor_si512(s2, s0);
-                s3 = _mm512_xor_si512(s3, s1);
-                s1 = _mm512_xor_si512(s1, s2);
-                s0 = _mm512_xor_si512(s0, s3);
-                s2 = _mm512_xor_si512(s2, t);
-                s3 = _mm512_rol_epi64::<45>(s3);
+            let mut st = [[_mm512_setzero_si512(); 2]; 4];
+            for (word, regs) in st.iter_mut().enumerate() {
+                for (h, reg) in regs.iter_mut().enumerate() {
+                    *reg = _mm512_loadu_si512(s[word][8 * h..].as_ptr().cast());
+                }
             }
-            for (w, v) in s.iter_mut().zip([s0, s1, s2, s3]) {
-                _mm512_storeu_si512(w.as_mut_ptr().cast(), v);
+            for chunk in out.chunks_exact_mut(LANES) {
+                for h in 0..2 {
+                    let [s0, s1, s2, s3] = [st[0][h], st[1][h], st[2][h], st[3][h]];
+                    let r = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
+                    _mm512_storeu_si512(chunk[8 * h..].as_mut_ptr().cast(), r);
+                    let t = _mm512_slli_epi64::<17>(s1);
+                    let s2 = _mm512_xor_si512(s2, s0);
+                    let s3 = _mm512_xor_si512(s3, s1);
+                    let s1 = _mm512_xor_si512(s1, s2);
+                    let s0 = _mm512_xor_si512(s0, s3);
+                    let s2 = _mm512_xor_si512(s2, t);
+                    let s3 = _mm512_rol_epi64::<45>(s3);
+                    st[0][h] = s0;
+                    st[1][h] = s1;
+                    st[2][h] = s2;
+                    st[3][h] = s3;
+                }
+            }
+            for (word, regs) in st.iter().enumerate() {
+                for (h, reg) in regs.iter().enumerate() {
+                    _mm512_storeu_si512(s[word][8 * h..].as_mut_ptr().cast(), *reg);
+                }
             }
         }
     }
@@ -153,20 +168,20 @@ mod simd {
         unsafe { _mm256_or_si256(_mm256_slli_epi64::<L>(x), _mm256_srli_epi64::<R>(x)) }
     }
 
-    /// AVX2: two registers per state word (lanes 0–3 and 4–7).
+    /// AVX2: four registers per state word (lanes 0–3, 4–7, 8–11, 12–15).
     #[target_feature(enable = "avx2")]
     pub(super) fn fill_avx2(s: &mut [[u64; LANES]; 4], out: &mut [u64]) {
         // SAFETY: as in `fill_avx512`; each half is four in-bounds words.
         unsafe {
             let ld = |w: &[u64; LANES], h: usize| _mm256_loadu_si256(w[4 * h..].as_ptr().cast());
-            let mut st = [[_mm256_setzero_si256(); 2]; 4];
+            let mut st = [[_mm256_setzero_si256(); 4]; 4];
             for (word, regs) in st.iter_mut().enumerate() {
                 for (h, reg) in regs.iter_mut().enumerate() {
                     *reg = ld(&s[word], h);
                 }
             }
             for chunk in out.chunks_exact_mut(LANES) {
-                for h in 0..2 {
+                for h in 0..4 {
                     let [s0, s1, s2, s3] = [st[0][h], st[1][h], st[2][h], st[3][h]];
                     let r = _mm256_add_epi64(rotl::<23, 41>(_mm256_add_epi64(s0, s3)), s0);
                     _mm256_storeu_si256(chunk[4 * h..].as_mut_ptr().cast(), r);
@@ -221,13 +236,13 @@ mod tests {
         let mut a = LaneRng::new();
         a.seed(&mut PlannerRng::new(4));
         let mut reference = a.clone();
-        let mut expect = [0u64; 48];
+        let mut expect = [0u64; 96];
         reference.fill_portable(&mut expect);
         let mut blocks = a.clone();
         for j in 0..6 {
-            assert_eq!(expect[8 * j..8 * j + 8], blocks.next_block());
+            assert_eq!(expect[16 * j..16 * j + 16], blocks.next_block());
         }
-        let mut buf = [0u64; 48];
+        let mut buf = [0u64; 96];
         a.clone().fill(&mut buf);
         assert_eq!(buf, expect);
         #[cfg(target_arch = "x86_64")]

@@ -47,12 +47,12 @@
 //!   and twice the SIMD width halves the update's cost (issue 2 §7). The
 //!   decoder widens `f32` exactly, so results are still exact functions of
 //!   the seed.
-//! - r1 and r2 come from eight interleaved xoshiro256++ lanes seeded from the
+//! - r1 and r2 come from sixteen interleaved xoshiro256++ lanes seeded from the
 //!   caller's `PlannerRng` (see `lanes.rs`), 24 bits each (one 64-bit word
 //!   per dimension).
 
 use super::Solver;
-use super::lanes::LaneRng;
+use super::lanes::{LANES, LaneRng};
 use crate::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN, padded_len};
 use crate::problem::{MAX_NODES, Problem};
 use crate::rng::PlannerRng;
@@ -344,7 +344,9 @@ fn update_swarm_generic(pso: &mut Pso, w: f32) {
         v_max: Pso::v_max(),
     };
     let gbest = &pso.gbest[..stride];
-    let bits = &mut pso.bits[..stride];
+    // The fill runs in whole blocks of the lane count; words past `stride`
+    // are drawn and left unused.
+    let bits = &mut pso.bits[..stride.next_multiple_of(LANES)];
     for i in 0..pso.settings.particles {
         let row = i * stride..(i + 1) * stride;
         pso.lanes.fill(bits);
