@@ -13,9 +13,17 @@
 //!
 //! Run: `cargo bench --bench solvers -- --warm-up-time 1 --measurement-time 3`
 //! (single-threaded; the medians are what the targets refer to).
+//!
+//! Every bench runs twice: by wall-clock time (`decode/40`, …, criterion's
+//! default) and, on Linux, by the benchmark thread's CPU time
+//! (`cpu_decode/40`, …). The machine is shared; when other processes keep
+//! both cores busy, wall-clock medians include the time this thread waited
+//! for a core, while CPU time counts only the time it ran (cache damage from
+//! the other processes still shows).
 use std::hint::black_box;
 
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::measurement::{Measurement, ValueFormatter};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use planner::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN};
 use planner::fixtures::random_instance;
 use planner::problem::{MAX_NODES, Problem};
@@ -39,8 +47,8 @@ fn problems(n: usize) -> Vec<Problem> {
         .collect()
 }
 
-fn decode(c: &mut Criterion) {
-    let mut g = c.benchmark_group("decode");
+fn decode<M: Measurement>(c: &mut Criterion<M>, name: &str) {
+    let mut g = c.benchmark_group(name);
     for n in SIZES {
         let ps = problems(n);
         // A pool of random vectors so the branch predictor cannot learn one.
@@ -61,7 +69,7 @@ fn decode(c: &mut Criterion) {
     g.finish();
 }
 
-fn full_budget<S: Solver>(c: &mut Criterion, name: &str, iterations: u32, mut solver: S) {
+fn full_budget<S: Solver, M: Measurement>(c: &mut Criterion<M>, name: &str, iterations: u32, mut solver: S) {
     let mut g = c.benchmark_group(name);
     for n in SIZES {
         let ps = problems(n);
@@ -84,15 +92,121 @@ fn full_budget<S: Solver>(c: &mut Criterion, name: &str, iterations: u32, mut so
     g.finish();
 }
 
-fn pso(c: &mut Criterion) {
+fn pso<M: Measurement>(c: &mut Criterion<M>, name: &str) {
     let s = PsoSettings::paper();
-    full_budget(c, "pso_full_budget", s.iterations, Pso::new(s));
+    full_budget(c, name, s.iterations, Pso::new(s));
 }
 
-fn bbo(c: &mut Criterion) {
+fn bbo<M: Measurement>(c: &mut Criterion<M>, name: &str) {
     let s = BboSettings::paper();
-    full_budget(c, "bbo_full_budget", s.generations, Bbo::new(s));
+    full_budget(c, name, s.generations, Bbo::new(s));
 }
 
-criterion_group!(benches, decode, pso, bbo);
-criterion_main!(benches);
+fn wall(c: &mut Criterion) {
+    decode(c, "decode");
+    pso(c, "pso_full_budget");
+    bbo(c, "bbo_full_budget");
+}
+
+criterion_group!(by_wall_clock, wall);
+
+/// CPU time of the calling thread (`CLOCK_THREAD_CPUTIME_ID`).
+#[cfg(target_os = "linux")]
+struct ThreadCpuTime;
+
+#[cfg(target_os = "linux")]
+mod cpu_clock {
+    #[repr(C)]
+    struct Timespec {
+        tv_sec: i64,
+        tv_nsec: i64,
+    }
+    unsafe extern "C" {
+        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
+    }
+    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+
+    /// Nanoseconds of CPU time this thread has used.
+    pub fn now_ns() -> u64 {
+        let mut t = Timespec { tv_sec: 0, tv_nsec: 0 };
+        // SAFETY: `t` is a valid, writable timespec; the call only fills it.
+        let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) };
+        assert_eq!(rc, 0, "clock_gettime(CLOCK_THREAD_CPUTIME_ID) failed");
+        t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
+    }
+}
+
+#[cfg(target_os = "linux")]
+struct NanosFormatter;
+
+#[cfg(target_os = "linux")]
+impl ValueFormatter for NanosFormatter {
+    fn scale_values(&self, typical_ns: f64, values: &mut [f64]) -> &'static str {
+        let (factor, unit) = match typical_ns {
+            t if t < 1e3 => (1.0, "ns"),
+            t if t < 1e6 => (1e-3, "µs"),
+            t if t < 1e9 => (1e-6, "ms"),
+            _ => (1e-9, "s"),
+        };
+        values.iter_mut().for_each(|v| *v *= factor);
+        unit
+    }
+
+    fn scale_throughputs(&self, _typical: f64, throughput: &Throughput, values: &mut [f64]) -> &'static str {
+        let per_iteration = match *throughput {
+            Throughput::Elements(e) | Throughput::ElementsAndBytes { elements: e, .. } => e as f64,
+            Throughput::Bytes(b) | Throughput::BytesDecimal(b) => b as f64,
+            Throughput::Bits(b) => b as f64,
+        };
+        values.iter_mut().for_each(|v| *v = per_iteration * 1e9 / *v);
+        "/s (CPU)"
+    }
+
+    fn scale_for_machines(&self, _values: &mut [f64]) -> &'static str {
+        "ns"
+    }
+}
+
+#[cfg(target_os = "linux")]
+impl Measurement for ThreadCpuTime {
+    type Intermediate = u64;
+    type Value = u64;
+
+    fn start(&self) -> u64 {
+        cpu_clock::now_ns()
+    }
+    fn end(&self, start: u64) -> u64 {
+        cpu_clock::now_ns() - start
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, v: &u64) -> f64 {
+        *v as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        &NanosFormatter
+    }
+}
+
+#[cfg(target_os = "linux")]
+fn cpu(c: &mut Criterion<ThreadCpuTime>) {
+    decode(c, "cpu_decode");
+    pso(c, "cpu_pso_full_budget");
+    bbo(c, "cpu_bbo_full_budget");
+}
+
+#[cfg(target_os = "linux")]
+criterion_group! {
+    name = by_thread_cpu_time;
+    config = Criterion::default().with_measurement(ThreadCpuTime);
+    targets = cpu
+}
+
+#[cfg(target_os = "linux")]
+criterion_main!(by_wall_clock, by_thread_cpu_time);
+#[cfg(not(target_os = "linux"))]
+criterion_main!(by_wall_clock);

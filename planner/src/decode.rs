@@ -877,6 +877,36 @@ mod tests {
     }
 
     #[test]
+    fn budgets_at_the_edge_of_a_step_decode_alike_on_every_kernel() {
+        // The look-ahead of the first step equals the budget to within a
+        // few ulps: every kernel must make the plain rule's f64 decision on
+        // either side of the edge (no kernel may decide in lower precision).
+        let mut inst = line_instance();
+        // Times that are not f32 values, so lower precision would show.
+        for (i, node) in inst.nodes.iter_mut().enumerate() {
+            node.x += 0.1 * i as f64 + 0.012_345_678_9;
+        }
+        let base = Problem::from_instance(&inst).unwrap().reach_row(0)[1]; // via node 1
+        assert_ne!(f64::from(base as f32), base);
+        let mut checked = 0;
+        for k in -40i64..=40 {
+            let limit = base + (k as f64) * base * f64::EPSILON;
+            let mut inst = inst.clone();
+            inst.time_available_s = limit / (1.0 + crate::problem::FEASIBILITY_REL_TOL);
+            let Ok(p) = Problem::from_instance(&inst) else { continue };
+            let prio = [0.0, 50.0, 40.0, -10.0];
+            let plain = reference_decode(&p, &prio);
+            for kernel in Kernel::available() {
+                let mut r = Route::new();
+                Decoder::new().decode_with(kernel, &p, &prio, &mut r);
+                assert_eq!(r.to_vec(), plain, "k={k} {kernel:?}");
+            }
+            checked += 1;
+        }
+        assert!(checked > 60);
+    }
+
+    #[test]
     fn ties_go_to_the_lower_id() {
         // Nodes 1 and 2 both neighbour 0 in this little diamond; equal
         // priorities must pick 1 whatever the kernel.
