@@ -25,6 +25,8 @@ struct Cli {
 enum Command {
     /// Solve an `auv-route-instance/1` file and print its solution.
     Solve(cli::solve::Args),
+    /// Write a scenario's current snapshot as instance JSON.
+    Export(cli::export::Args),
     /// Convert classic orienteering benchmark files (Tsiligirides, Chao) into instance JSON.
     ConvertOp(cli::convert_op::Args),
 }
@@ -33,6 +35,7 @@ fn main() -> ExitCode {
     let parsed = Cli::parse();
     let result = match parsed.command {
         Command::Solve(args) => cli::solve::run(args),
+        Command::Export(args) => cli::export::run(args),
         Command::ConvertOp(args) => cli::convert_op::run(args),
     };
     match result {

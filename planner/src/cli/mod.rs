@@ -9,6 +9,7 @@
 //! (an unwritable output, a planner defect).
 
 pub mod convert_op;
+pub mod export;
 pub mod solve;
 
 use std::io::{self, Write};
@@ -17,6 +18,7 @@ use std::path::{Path, PathBuf};
 use planner::instance::{Instance, InstanceError};
 use planner::oplib::OpError;
 use planner::problem::ProblemError;
+use planner::scenario::{ConfigError, LoadError};
 
 /// Seed used when `--seed` is not given (our choice; any fixed value would
 /// do). The output always reports the seed it used.
@@ -77,6 +79,22 @@ pub enum CliError {
         path: PathBuf,
         /// What is wrong, with line and column.
         source: OpError,
+    },
+    /// A scenario file breaks the `auv-scenario/1` format.
+    #[error("{}: {source}", path.display())]
+    ScenarioConfig {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        source: ConfigError,
+    },
+    /// A scenario whose chart or network cannot be built (no water, …).
+    #[error("{origin}: {source}")]
+    World {
+        /// The scenario file, or `default scenario`.
+        origin: String,
+        /// What is wrong.
+        source: LoadError,
     },
     /// Arguments that parse but do not fit together.
     #[error("{0}")]
