@@ -1,7 +1,48 @@
 //! `planner`: the command-line front of the planner library.
+//!
+//! Contract: every subcommand lives in its own module under [`cli`] with an
+//! `Args` struct and a `run` function. Success exits 0. A failure prints one
+//! line `planner: error: <what is wrong>` to stderr and exits non-zero (2 for
+//! bad input or arguments, 1 when output cannot be written or the planner
+//! itself is at fault); clap reports its own usage errors (also exit 2).
+
+mod cli;
+
 use std::process::ExitCode;
 
+use clap::{Parser, Subcommand};
+
+/// Real-time task-assign route planner for AUVs (PSO and BBO on a
+/// priority-vector encoding).
+#[derive(Parser, Debug)]
+#[command(name = "planner", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Solve an `auv-route-instance/1` file and print its solution.
+    Solve(cli::solve::Args),
+    /// Write a scenario's current snapshot as instance JSON.
+    Export(cli::export::Args),
+    /// Convert classic orienteering benchmark files (Tsiligirides, Chao) into instance JSON.
+    ConvertOp(cli::convert_op::Args),
+}
+
 fn main() -> ExitCode {
-    eprintln!("planner: no commands yet");
-    ExitCode::from(2)
+    let parsed = Cli::parse();
+    let result = match parsed.command {
+        Command::Solve(args) => cli::solve::run(args),
+        Command::Export(args) => cli::export::run(args),
+        Command::ConvertOp(args) => cli::convert_op::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            cli::report(&e);
+            ExitCode::from(e.exit_code())
+        }
+    }
 }
