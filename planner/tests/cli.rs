@@ -190,7 +190,6 @@ fn assert_figures_match(doc: &Value, sol: &Value) {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn solve_json_figures_equal_the_recomputation_from_the_instance() {
     let dir = scratch("figures");
     for (k, objective) in [Objective::MaxWeight, Objective::PaperCost { phi1: 0.01, phi2: 2.0 }]
@@ -244,7 +243,6 @@ fn instances_round_trip_through_json_bit_for_bit() {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn solve_without_json_prints_a_readable_summary() {
     let dir = scratch("summary");
     let path = write_instance(&dir, "paper.json", &paper_like(5));
@@ -265,7 +263,6 @@ fn solve_without_json_prints_a_readable_summary() {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn same_seed_gives_identical_json_except_solve_ms() {
     let dir = scratch("determinism");
     let path = write_instance(&dir, "paper.json", &paper_like(21));
@@ -289,7 +286,6 @@ fn best_known() -> BestKnown {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn classic_instances_convert_and_solve_within_the_known_optimum() {
     let dir = scratch("classic");
     let best = best_known();
@@ -439,7 +435,6 @@ fn export_follows_a_scenario_file() {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn an_exported_snapshot_solves_with_checkable_figures() {
     let (path, out) = export("export-solve", &["--seed", "5"]);
     assert_ok(&out);
