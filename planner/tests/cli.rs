@@ -768,3 +768,88 @@ fn bad_input_chart_with_no_water() {
     ]);
     assert_input_error(&out, &["desert.png"]);
 }
+
+#[test]
+fn montecarlo_writes_the_table_csv_and_figures_deterministically() {
+    let dir = scratch("montecarlo");
+    let run = |out: &Path| {
+        planner(&[
+            "montecarlo",
+            "--runs",
+            "3",
+            "--nodes",
+            "12",
+            "--seed",
+            "5",
+            "--threads",
+            "2",
+            "--out",
+            path_str(out),
+        ])
+    };
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let out = run(&a);
+    assert_ok(&out);
+    let table = stdout(&out);
+    for needle in [
+        "cost",
+        "cpu_time (ms)",
+        "route_time (s)",
+        "distance (m)",
+        "tasks",
+        "weight",
+        "violation (s)",
+        "feasible (rate)",
+        "pso",
+        "bbo",
+    ] {
+        assert!(table.contains(needle), "{needle} missing from\n{table}");
+    }
+    for f in [
+        "runs.csv",
+        "summary.txt",
+        "fig4-cost-cpu.svg",
+        "fig5-time-distance.svg",
+        "fig6-tasks-weight.svg",
+        "fig7-violation.svg",
+        "fig8-network.svg",
+    ] {
+        assert!(a.join(f).is_file(), "{f} not written");
+    }
+    let csv = std::fs::read_to_string(a.join("runs.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("run,algorithm,seed,cost,cpu_ms,route_time_s,distance_m,tasks,weight,violation_s,feasible")
+    );
+    assert_eq!(lines.count(), 6, "3 runs x 2 algorithms");
+    // Same seed, same rows (the CPU time column aside).
+    assert_ok(&run(&b));
+    let strip = |p: &Path| -> Vec<String> {
+        std::fs::read_to_string(p.join("runs.csv"))
+            .unwrap()
+            .lines()
+            .map(|l| {
+                let mut cols: Vec<&str> = l.split(',').collect();
+                cols.remove(4);
+                cols.join(",")
+            })
+            .collect()
+    };
+    assert_eq!(strip(&a), strip(&b));
+}
+
+#[test]
+fn montecarlo_rejects_bad_arguments() {
+    let dir = scratch("montecarlo-bad");
+    let out_dir = dir.join("out");
+    let o = path_str(&out_dir);
+    assert_usage_error(&planner(&["montecarlo", "--runs", "0", "--out", o]), &["--runs"]);
+    assert_usage_error(&planner(&["montecarlo", "--algorithms", "pso,ga", "--out", o]), &["ga"]);
+    assert_input_error(
+        &planner(&["montecarlo", "--nodes", "129", "--out", o]),
+        &["--nodes 129", "128"],
+    );
+    assert_input_error(&planner(&["montecarlo", "--nodes", "1", "--out", o]), &["--nodes 1"]);
+    assert!(!out_dir.exists(), "nothing is written for rejected arguments");
+}
