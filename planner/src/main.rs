@@ -31,6 +31,8 @@ enum Command {
     ConvertOp(cli::convert_op::Args),
     /// Run the paper's Monte Carlo study: PSO and BBO on many network changes.
     Montecarlo(cli::montecarlo::Args),
+    /// Gap to the optimum and solve time of each algorithm on a folder of instances.
+    Quality(cli::quality::Args),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +42,7 @@ fn main() -> ExitCode {
         Command::Export(args) => cli::export::run(args),
         Command::ConvertOp(args) => cli::convert_op::run(args),
         Command::Montecarlo(args) => cli::montecarlo::run(args),
+        Command::Quality(args) => cli::quality::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

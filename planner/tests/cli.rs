@@ -200,7 +200,7 @@ fn solve_json_figures_equal_the_recomputation_from_the_instance() {
         inst.objective = objective;
         let path = write_instance(&dir, &format!("paper-{k}.json"), &inst);
         let doc: Value = serde_json::from_str(&inst.to_json()).unwrap();
-        for algorithm in ["pso", "bbo"] {
+        for algorithm in ["auto", "pso", "bbo"] {
             let (sol, text) = solve_json(&path, &["--algorithm", algorithm, "--iterations", "20"]);
             for key in [
                 "route",
@@ -257,7 +257,7 @@ fn solve_without_json_prints_a_readable_summary() {
     ]);
     assert_ok(&out);
     let text = stdout(&out);
-    for needle in ["route      0 -> ", "feasible   ", "weight     ", "seed 9", "pso"] {
+    for needle in ["route      0 -> ", "feasible   ", "weight     ", "seed 9", "auto"] {
         assert!(text.contains(needle), "{needle:?} missing from:\n{text}");
     }
 }
@@ -266,7 +266,7 @@ fn solve_without_json_prints_a_readable_summary() {
 fn same_seed_gives_identical_json_except_solve_ms() {
     let dir = scratch("determinism");
     let path = write_instance(&dir, "paper.json", &paper_like(21));
-    for algorithm in ["pso", "bbo"] {
+    for algorithm in ["auto", "pso", "bbo"] {
         let args = ["--algorithm", algorithm, "--seed", "12345", "--iterations", "30"];
         let strip = |text: String| -> String {
             text.lines()
@@ -296,7 +296,7 @@ fn classic_instances_convert_and_solve_within_the_known_optimum() {
         assert_ok(&planner(&["convert-op", &src, "--out", path_str(&json)]));
         let doc: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
         let optimum = best.get(&name).unwrap().score;
-        for algorithm in ["pso", "bbo"] {
+        for algorithm in ["auto", "pso", "bbo"] {
             let (sol, _) = solve_json(&json, &["--algorithm", algorithm]);
             assert_eq!(sol["feasible"], true, "{name} {algorithm}: {sol}");
             let weight = sol["weight"].as_f64().unwrap();
@@ -439,7 +439,7 @@ fn an_exported_snapshot_solves_with_checkable_figures() {
     let (path, out) = export("export-solve", &["--seed", "5"]);
     assert_ok(&out);
     let doc: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    for algorithm in ["pso", "bbo"] {
+    for algorithm in ["auto", "pso", "bbo"] {
         let (sol, _) = solve_json(&path, &["--algorithm", algorithm, "--iterations", "30"]);
         assert_eq!(sol["feasible"], true, "{algorithm}: {sol}");
         assert!(sol["weight"].as_f64().unwrap() > 0.0);

@@ -14,6 +14,7 @@ use planner::instance::{Edge, Instance, Objective};
 use planner::problem::Problem;
 use planner::rng::PlannerRng;
 use planner::route::{Route, RouteEval, RouteStats};
+use planner::solver::auto::{Auto, AutoSettings};
 use planner::solver::bbo::{Bbo, BboSettings};
 use planner::solver::pso::{Pso, PsoSettings};
 use planner::solver::{Algorithm, Budget, Solver, StopReason, run};
@@ -287,6 +288,13 @@ macro_rules! conformance {
 // The command line's constructors, with the paper's settings.
 conformance!(pso, || Algorithm::Pso.build(150));
 conformance!(bbo, || Algorithm::Bbo.build(150));
+conformance!(auto, || Algorithm::Auto.build(150));
+// A one-particle swarm with many kicks: the ILS path carries the search.
+conformance!(auto_tiny_swarm, || Auto::new(AutoSettings {
+    particles: 1,
+    kicks: 9,
+    ..AutoSettings::default()
+}));
 // An odd, tiny swarm: exercises the unpaired decode and small populations.
 conformance!(pso_odd_swarm, || Pso::new(PsoSettings {
     particles: 7,
@@ -336,4 +344,27 @@ fn bbo_paper_settings_pinned_route() {
     assert_eq!(route, [0, 13, 17, 34, 6, 31, 7, 37, 15, 35, 39]);
     assert!(e.feasible);
     assert_eq!(e.weight.to_bits(), 401.2435450683588f64.to_bits());
+}
+
+/// With a generous budget the default planner is at least as good as the
+/// paper-faithful PSO at its full budget, on several fixed networks and
+/// seeds (quality only; no timing).
+#[test]
+fn auto_is_at_least_as_good_as_paper_pso() {
+    for seed in 0..4 {
+        let inst = random_instance(40, 0.4, 31_000.0, 500 + seed);
+        let p = problem(&inst);
+        let mut pso = Algorithm::Pso.build(150);
+        run(&mut pso, &p, &mut PlannerRng::new(seed), None, Budget::iterations(150));
+        let (_, pe) = checked_best(&pso, &inst, &p);
+        let mut auto = Algorithm::Auto.build(100);
+        run(&mut auto, &p, &mut PlannerRng::new(seed), None, Budget::iterations(100));
+        let (_, ae) = checked_best(&auto, &inst, &p);
+        assert!(
+            !p.better(&pe, &ae),
+            "seed {seed}: pso {} beats auto {}",
+            pe.weight,
+            ae.weight
+        );
+    }
 }

@@ -1,7 +1,7 @@
 //! Proof that solving allocates nothing once a solver is built (issue 2 §4,
 //! house style §4): this test binary installs the counting allocator, builds
 //! problems and solvers, runs one warm-up solve, and then counts the solving
-//! thread's allocations over many full-budget solves of PSO and BBO — both
+//! thread's allocations over many full-budget solves of PSO, BBO and auto — both
 //! objectives, cold and warm-started, with and without a deadline. Counts are
 //! per thread, so the harness's other test threads cannot disturb them.
 
@@ -13,6 +13,7 @@ use planner::instance::Objective;
 use planner::problem::Problem;
 use planner::rng::PlannerRng;
 use planner::route::Route;
+use planner::solver::auto::{Auto, AutoSettings};
 use planner::solver::bbo::{Bbo, BboSettings};
 use planner::solver::pso::{Pso, PsoSettings};
 use planner::solver::{Budget, Solver, StopReason, run};
@@ -84,6 +85,12 @@ fn pso_full_budget_solves_do_not_allocate() {
 fn bbo_full_budget_solves_do_not_allocate() {
     let s = BboSettings::paper();
     assert_no_allocations(Bbo::new(s), s.generations);
+}
+
+#[test]
+fn auto_solves_do_not_allocate() {
+    // Fewer steps than PSO's budget: each step also polishes and kicks.
+    assert_no_allocations(Auto::new(AutoSettings::default()), 40);
 }
 
 #[test]

@@ -11,6 +11,7 @@
 pub mod convert_op;
 pub mod export;
 pub mod montecarlo;
+pub mod quality;
 pub mod solve;
 
 use std::io::{self, Write};

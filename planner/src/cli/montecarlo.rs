@@ -60,7 +60,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut algorithms = args.algorithms.clone();
     algorithms.dedup();
     if algorithms.is_empty() {
-        return Err(CliError::Usage("--algorithms: name at least one of pso, bbo".into()));
+        return Err(CliError::Usage(
+            "--algorithms: name at least one of pso, bbo, auto".into(),
+        ));
     }
     std::fs::create_dir_all(&args.out).map_err(|source| CliError::Write {
         path: args.out.clone(),

@@ -8,11 +8,13 @@
 //! output except `solve_ms`.
 
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 use clap::ValueEnum;
 use planner::problem::Problem;
 use planner::rng::PlannerRng;
 use planner::solution::{RunInfo, Solution};
+use planner::solver::auto::{AUTO_ITERATIONS, Auto};
 use planner::solver::bbo::{Bbo, BboSettings};
 use planner::solver::pso::{Pso, PsoSettings};
 use planner::solver::{self, Budget, Solver};
@@ -22,6 +24,8 @@ use super::{CliError, DEFAULT_SEED, load_instance, print};
 /// The solvers `--algorithm` offers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum AlgorithmArg {
+    /// The default planner: memetic PSO with local search and ruin-and-recreate.
+    Auto,
     /// Particle swarm optimisation (paper: 150 particles).
     Pso,
     /// Biogeography-based optimisation (paper: 50 habitats, 10 elites).
@@ -34,6 +38,10 @@ impl AlgorithmArg {
     /// the iterations actually run). Returns the solver and its budget.
     pub fn build(self, iterations: Option<u32>) -> (Box<dyn Solver>, u32) {
         match self {
+            Self::Auto => {
+                let n = iterations.unwrap_or(AUTO_ITERATIONS);
+                (Box::new(Auto::default()), n)
+            }
             Self::Pso => {
                 let mut s = PsoSettings::paper();
                 s.iterations = iterations.unwrap_or(s.iterations);
@@ -55,12 +63,16 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub instance: PathBuf,
     /// Solver to run.
-    #[arg(long, value_enum, default_value_t = AlgorithmArg::Pso)]
+    #[arg(long, value_enum, default_value_t = AlgorithmArg::Auto)]
     pub algorithm: AlgorithmArg,
     /// Seed of the planner's random generator; the output reports it.
     #[arg(long, default_value_t = DEFAULT_SEED, allow_negative_numbers = true)]
     pub seed: u64,
-    /// Iterations (generations) to run, at least 1 [default: the paper's 150].
+    /// Wall-clock budget of the whole solve in milliseconds (the best route
+    /// found by then is printed).
+    #[arg(long, value_name = "D", value_parser = clap::value_parser!(u64).range(1..))]
+    pub deadline_ms: Option<u64>,
+    /// Iterations (generations) to run, at least 1 [default: the paper's 150; auto: 300].
     #[arg(
         long,
         value_name = "N",
@@ -87,7 +99,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         &problem,
         &mut rng,
         None,
-        Budget::iterations(iterations),
+        Budget {
+            iterations,
+            deadline: args.deadline_ms.map(|d| Instant::now() + Duration::from_millis(d)),
+        },
     );
     let route = solver.best().0.to_vec();
     let info = RunInfo::from_outcome(solver.name(), args.seed, &outcome);

@@ -8,6 +8,7 @@
 //! iteration budget or a deadline, whichever comes first, and says why it
 //! stopped (house style §1). Solvers know nothing of transport or files.
 
+pub mod auto;
 pub mod bbo;
 mod lanes;
 pub mod local;
@@ -15,6 +16,7 @@ pub mod pso;
 
 use std::time::{Duration, Instant};
 
+use auto::{AUTO_ITERATIONS, Auto, AutoSettings};
 use bbo::{Bbo, BboSettings};
 use pso::{Pso, PsoSettings};
 
@@ -127,31 +129,36 @@ pub enum Algorithm {
     Pso,
     /// [`Bbo`] with the paper's settings.
     Bbo,
+    /// [`Auto`], the memetic default planner (issue 5).
+    Auto,
 }
 
 /// A name that is not an [`Algorithm`].
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown algorithm `{0}` (expected one of: pso, bbo)")]
+#[error("unknown algorithm `{0}` (expected one of: pso, bbo, auto)")]
 pub struct UnknownAlgorithm(pub String);
 
 impl Algorithm {
     /// Every algorithm, in a fixed order (reports, Monte Carlo columns).
-    pub const ALL: [Self; 2] = [Self::Pso, Self::Bbo];
+    pub const ALL: [Self; 3] = [Self::Pso, Self::Bbo, Self::Auto];
 
     /// The name used on the command line and in reports.
     pub fn as_str(self) -> &'static str {
         match self {
             Self::Pso => "pso",
             Self::Bbo => "bbo",
+            Self::Auto => "auto",
         }
     }
 
     /// Iterations of the paper's full budget: 150 PSO iterations (paper),
-    /// 150 BBO generations (our choice, the paper is silent).
+    /// 150 BBO generations (our choice, the paper is silent);
+    /// [`AUTO_ITERATIONS`] steps of `auto` (a deadline usually cuts it).
     pub fn paper_iterations(self) -> u32 {
         match self {
             Self::Pso => PsoSettings::paper().iterations,
             Self::Bbo => BboSettings::paper().generations,
+            Self::Auto => AUTO_ITERATIONS,
         }
     }
 
@@ -168,6 +175,8 @@ impl Algorithm {
                 generations: iterations,
                 ..BboSettings::paper()
             })),
+            // Auto's inertia schedule is its own; the budget is only run's.
+            Self::Auto => Box::new(Auto::new(AutoSettings::default())),
         }
     }
 }
@@ -228,9 +237,13 @@ mod tests {
         for a in Algorithm::ALL {
             assert_eq!(a.as_str().parse::<Algorithm>(), Ok(a));
             assert_eq!(a.build(7).name(), a.as_str());
-            assert_eq!(a.paper_iterations(), 150);
         }
+        assert_eq!(Algorithm::Pso.paper_iterations(), 150);
+        assert_eq!(Algorithm::Bbo.paper_iterations(), 150);
         let err = "PSO".parse::<Algorithm>().unwrap_err();
-        assert_eq!(err.to_string(), "unknown algorithm `PSO` (expected one of: pso, bbo)");
+        assert_eq!(
+            err.to_string(),
+            "unknown algorithm `PSO` (expected one of: pso, bbo, auto)"
+        );
     }
 }

@@ -266,6 +266,24 @@ impl Pso {
         false
     }
 
+    /// Lamarckian write-back for the memetic `auto` planner: makes `route`
+    /// (figures `e`) the position and personal best of the swarm's best
+    /// particle and the swarm's best, encoded by [`warm_vector`] so the
+    /// particle decodes back to it. Never called by the paper-faithful PSO.
+    pub(crate) fn adopt(&mut self, route: &Route, e: RouteEval) {
+        let mut v = [0.0f64; MAX_NODES];
+        warm_vector(route, self.n, &mut v);
+        let row = self.best_particle * self.stride..self.best_particle * self.stride + self.n;
+        for ((x, b), src) in self.x[row.clone()].iter_mut().zip(&mut self.pbest[row]).zip(&v) {
+            *x = *src as f32;
+            *b = *src as f32;
+        }
+        self.pbest_eval[self.best_particle] = e;
+        self.best = *route;
+        self.best_eval = e;
+        self.refresh_gbest();
+    }
+
     fn refresh_gbest(&mut self) {
         let row = self.best_particle * self.stride..(self.best_particle + 1) * self.stride;
         self.gbest[..self.stride].copy_from_slice(&self.pbest[row]);
