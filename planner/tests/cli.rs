@@ -353,7 +353,7 @@ fn convert_op_converts_a_folder_tree() {
     let out_dir = dir.join("out");
     let out = planner(&["convert-op", &format!("{DATA}/op"), "--out", path_str(&out_dir)]);
     assert_ok(&out);
-    assert!(stdout(&out).contains("converted 2 files"), "{}", stdout(&out));
+    assert!(stdout(&out).contains("converted 3 files"), "{}", stdout(&out));
     for tmax in ["05", "10"] {
         let p = out_dir.join(format!("tsiligirides_set1/tsiligirides_problem_1_budget_{tmax}.json"));
         let inst = Instance::from_json(&std::fs::read_to_string(&p).unwrap()).unwrap();
@@ -852,4 +852,115 @@ fn montecarlo_rejects_bad_arguments() {
     );
     assert_input_error(&planner(&["montecarlo", "--nodes", "1", "--out", o]), &["--nodes 1"]);
     assert!(!out_dir.exists(), "nothing is written for rejected arguments");
+}
+
+#[test]
+fn quality_reports_gaps_on_classic_instances() {
+    let dir = scratch("quality");
+    let csv = dir.join("quality.csv");
+    let out = planner(&[
+        "quality",
+        "--instances",
+        &format!("{DATA}/op"),
+        "--deadline-ms",
+        "20",
+        "--algorithms",
+        "auto,pso",
+        "--out",
+        path_str(&csv),
+    ]);
+    assert_ok(&out);
+    let text = stdout(&out);
+    for needle in ["3 instances", "mean gap%", "p99 ms", "auto", "pso"] {
+        assert!(text.contains(needle), "{needle:?} missing from:\n{text}");
+    }
+    let best = best_known();
+    let body = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = body.lines();
+    assert_eq!(
+        lines.next(),
+        Some("instance,algorithm,score,optimum,gap,solve_ms,feasible,optimum_source")
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 6, "3 instances x 2 algorithms");
+    for r in &rows {
+        let optimum = best.get(r[0]).unwrap().score;
+        assert_eq!(r[3].parse::<f64>().unwrap(), optimum);
+        let score: f64 = r[2].parse().unwrap();
+        assert!(score <= optimum, "{r:?}");
+        let gap: f64 = r[4].parse().unwrap();
+        assert!((gap - 100.0 * (optimum - score) / optimum).abs() < 1e-3, "{r:?}");
+        assert_eq!(r[6], "true");
+        assert_eq!(r[7], "best_known");
+    }
+}
+
+#[test]
+fn quality_rejects_bad_inputs() {
+    let dir = scratch("quality-bad");
+    let csv = dir.join("q.csv");
+    let o = path_str(&csv);
+    let missing = dir.join("missing");
+    assert_input_error(
+        &planner(&["quality", "--instances", path_str(&missing), "--out", o]),
+        &["--instances", "not a folder"],
+    );
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    assert_input_error(
+        &planner(&["quality", "--instances", path_str(&empty), "--out", o]),
+        &["no instance files"],
+    );
+    let bad_op = dir.join("bad-op");
+    std::fs::create_dir_all(&bad_op).unwrap();
+    std::fs::write(bad_op.join("broken.txt"), "5 x\n1 2\n").unwrap();
+    assert_input_error(
+        &planner(&["quality", "--instances", path_str(&bad_op), "--out", o]),
+        &["broken.txt"],
+    );
+    let bad_json = dir.join("bad-json");
+    std::fs::create_dir_all(&bad_json).unwrap();
+    std::fs::write(bad_json.join("broken.json"), "{").unwrap();
+    assert_input_error(
+        &planner(&["quality", "--instances", path_str(&bad_json), "--out", o]),
+        &["broken.json"],
+    );
+    assert_usage_error(
+        &planner(&[
+            "quality",
+            "--instances",
+            path_str(&bad_json),
+            "--algorithms",
+            "ga",
+            "--out",
+            o,
+        ]),
+        &["ga"],
+    );
+    assert_usage_error(
+        &planner(&[
+            "quality",
+            "--instances",
+            path_str(&bad_json),
+            "--deadline-ms",
+            "0",
+            "--out",
+            o,
+        ]),
+        &["--deadline-ms"],
+    );
+    assert!(!csv.exists(), "no CSV after a failure");
+}
+
+#[test]
+fn solve_takes_a_deadline() {
+    let dir = scratch("deadline");
+    let path = write_instance(&dir, "paper.json", &paper_like(8));
+    let (sol, _) = solve_json(&path, &["--deadline-ms", "5"]);
+    assert_eq!(sol["algorithm"], "auto");
+    assert_eq!(sol["feasible"], true, "{sol}");
+    assert_usage_error(
+        &planner(&["solve", "--instance", path_str(&path), "--deadline-ms", "0"]),
+        &["--deadline-ms"],
+    );
 }

@@ -190,8 +190,15 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let mut results = Vec::new();
         for (a, s) in &mut solvers {
             let mut rng = PlannerRng::new(args.seed);
+            // Auto spends the whole deadline (issue 5 §2); PSO and BBO keep
+            // the paper's budget, cut by the deadline.
+            let iterations = if *a == Algorithm::Auto {
+                u32::MAX
+            } else {
+                a.paper_iterations()
+            };
             let budget = Budget {
-                iterations: a.paper_iterations(),
+                iterations,
                 deadline: Some(Instant::now() + deadline),
             };
             let out = solver::run(s.as_mut(), &problem, &mut rng, None, budget);

@@ -36,10 +36,12 @@ impl AlgorithmArg {
     /// Builds the solver with the paper's settings, its iteration budget
     /// replaced by `iterations` when given (so PSO's inertia schedule spans
     /// the iterations actually run). Returns the solver and its budget.
-    pub fn build(self, iterations: Option<u32>) -> (Box<dyn Solver>, u32) {
+    pub fn build(self, iterations: Option<u32>, deadline: bool) -> (Box<dyn Solver>, u32) {
         match self {
             Self::Auto => {
-                let n = iterations.unwrap_or(AUTO_ITERATIONS);
+                // Under a deadline auto's default budget is unbounded, so it
+                // uses the whole deadline (issue 5 §2).
+                let n = iterations.unwrap_or(if deadline { u32::MAX } else { AUTO_ITERATIONS });
                 (Box::new(Auto::default()), n)
             }
             Self::Pso => {
@@ -92,7 +94,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         path: args.instance.clone(),
         source,
     })?;
-    let (mut solver, iterations) = args.algorithm.build(args.iterations);
+    let (mut solver, iterations) = args.algorithm.build(args.iterations, args.deadline_ms.is_some());
     let mut rng = PlannerRng::new(args.seed);
     let outcome = solver::run(
         solver.as_mut(),

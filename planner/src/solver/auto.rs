@@ -45,6 +45,9 @@ pub struct AutoSettings {
     pub polish_passes: u32,
     /// Kicks without a new best before the search returns to the best.
     pub restart_after: u32,
+    /// Record-to-record acceptance: a kick's result becomes the current
+    /// route when its score is within this fraction of the best's.
+    pub accept: f64,
 }
 
 impl Default for AutoSettings {
@@ -52,12 +55,17 @@ impl Default for AutoSettings {
         Self {
             particles: 20,
             swarm_iterations: 60,
-            kicks: 4,
+            kicks: KICKS,
             polish_passes: 64,
-            restart_after: 24,
+            restart_after: RESTART,
+            accept: ACCEPT,
         }
     }
 }
+
+const KICKS: u32 = 1;
+const RESTART: u32 = 40;
+const ACCEPT: f64 = 0.05;
 
 /// Iterations of `auto`'s full budget when no deadline cuts it.
 pub const AUTO_ITERATIONS: u32 = 300;
@@ -146,7 +154,10 @@ impl Auto {
         recreate(p, &mut self.trial, &mut self.scratch, &mut e, barred, rng);
         recreate(p, &mut self.trial, &mut self.scratch, &mut e, NodeSet::EMPTY, rng);
         self.ls.improve(p, &mut self.trial, &mut e, self.settings.polish_passes);
-        if !p.better(&self.cur_eval, &e) {
+        // Record-to-record travel: take the trial when within `accept` of
+        // the best score, so the search can cross shallow valleys.
+        let floor = p.score(&self.best_eval) - self.settings.accept * p.score(&self.best_eval).abs();
+        if e.feasible && p.score(&e) >= floor {
             self.cur = self.trial;
             self.cur_eval = e;
         }
