@@ -1,0 +1,1 @@
+//! `planner mission` orchestration (in progress).

@@ -1,0 +1,2 @@
+//! The re-planning service (in progress).
+pub mod alloc;
