@@ -150,7 +150,7 @@ pub enum VehicleEvent {
     Periodic = 0,
     /// First message of the mission (at the start node, no plan yet).
     Start = 1,
-    /// Reached a waypoint and finished the edge's task: free at `to_node`.
+    /// Reached the waypoint `to_node`; the edge's task starts now.
     Arrival = 2,
     /// Lockstep: mission time reached a sensor period boundary.
     Tick = 3,
@@ -190,6 +190,9 @@ pub struct VehicleState {
     pub weight: f64,
     /// Distance travelled, m.
     pub distance_m: f64,
+    /// Mission seconds per real second (0: lockstep). Lets sensor-sim follow
+    /// the vehicle's clock instead of keeping its own.
+    pub time_scale: f64,
     /// `seq` of the plan being followed (0: none).
     pub plan_seq: u64,
     /// Latest waypoint snapshot epoch the vehicle has applied.
@@ -549,6 +552,14 @@ fn node(id: u32, n: usize) -> Result<usize, RejectKind> {
     }
 }
 
+fn ids_in_range(ids: &[u8]) -> Result<(), RejectKind> {
+    if ids.iter().all(|&id| (id as usize) < MAX_NODES) {
+        Ok(())
+    } else {
+        Err(RejectKind::NodeOutOfRange)
+    }
+}
+
 fn header_ok(h: &Header) -> Result<(), RejectKind> {
     at_least(h.mission_time_s, 0.0)?;
     if h.seq == 0 {
@@ -614,6 +625,8 @@ impl Validate for VehicleState {
         if len == 0 {
             return Err(RejectKind::Malformed);
         }
+        ids_in_range(&self.route[..len])?;
+        finite(self.time_scale)?;
         if self.needs_answer > 1 {
             return Err(RejectKind::Malformed);
         }
@@ -637,7 +650,7 @@ impl Validate for Plan {
         if len < 1 {
             return Err(RejectKind::Malformed);
         }
-        Ok(())
+        ids_in_range(&self.route[..len])
     }
 }
 
@@ -839,7 +852,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<RawPong>(), core::mem::size_of::<Plan>());
         assert_eq!(
             core::mem::size_of::<VehicleState>(),
-            40 + 8 * 3 + 8 * 4 + 8 * 2 + 4 * 10 + MAX_NODES
+            40 + 8 * 3 + 8 * 5 + 8 * 2 + 4 * 10 + MAX_NODES
         );
     }
 

@@ -1,1 +1,2 @@
-//! `planner mission` orchestration (in progress).
+//! `planner mission`: the three-process run, its report, log and plot.
+pub mod world;

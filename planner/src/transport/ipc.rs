@@ -26,6 +26,7 @@ use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
@@ -246,6 +247,11 @@ impl<S: Service, T: OnTopic> Outbox<T> for IpcOutbox<S, T> {
                 .map_err(|_| TransportError::Notify { topic })?;
         }
         Ok(self.seq)
+    }
+
+    fn refresh(&mut self) {
+        // A failed connection is retried on the next call or send.
+        let _ = self.publisher.update_connections();
     }
 }
 

@@ -225,6 +225,11 @@ pub trait Outbox<T: Message> {
     /// number, session, fingerprint, send time), sends it and wakes the
     /// topic's consumers. Returns the sequence number used.
     fn publish(&mut self, fill: &mut dyn FnMut(&mut T)) -> Result<u64, TransportError>;
+
+    /// Hands the latest value to subscribers that joined since the last
+    /// send (history reaches a late joiner only when its publisher acts,
+    /// notes §2). Cheap when nobody joined; call it when idle.
+    fn refresh(&mut self);
 }
 
 /// Drains one topic.
