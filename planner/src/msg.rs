@@ -108,6 +108,9 @@ pub struct WaypointSnapshot {
     pub phi1: f64,
     /// φ2 when `objective` is paper_cost.
     pub phi2: f64,
+    /// Mission time of the sensor's next update, s (a lockstep vehicle stops
+    /// there and waits for it).
+    pub next_update_s: f64,
     /// [`ObjectiveCode`].
     pub objective: u32,
     /// Valid entries of `nodes`.
@@ -251,6 +254,8 @@ pub struct Plan {
     pub snapshot_epoch: u64,
     /// `sent_mono_ns` of the triggering message, ns (for end-to-end latency).
     pub trigger_sent_mono_ns: u64,
+    /// When the planner took the trigger off the transport, ns (monotonic).
+    pub trigger_received_mono_ns: u64,
     /// Time from the trigger's arrival at the planner to this plan being handed
     /// to the transport, ns.
     pub compute_ns: u64,
@@ -366,9 +371,10 @@ pub struct AllocCounters {
     pub pool_high_water: u64,
     /// Pool blocks reserved at start-up.
     pub pool_capacity: u64,
-    /// Requests the pool could not serve (too big or pool exhausted) that went to the system allocator.
+    /// Requests of the service thread since start that the pool could not
+    /// serve (too big or pool exhausted) and that went to the system allocator.
     pub pool_misses: u64,
-    /// 1 once the steady state began.
+    /// 1 once the steady state began (it stays 1 after it ended).
     pub steady: u64,
 }
 
@@ -573,6 +579,7 @@ impl Validate for WaypointSnapshot {
         header_ok(&self.header)?;
         positive(self.speed_mps)?;
         positive(self.time_available_s)?;
+        at_least(self.next_update_s, self.header.mission_time_s)?;
         let objective = code::<ObjectiveCode>(self.objective)?;
         if objective == ObjectiveCode::PaperCost {
             at_least(self.phi1, 0.0)?;
@@ -845,9 +852,9 @@ mod tests {
         assert_eq!(core::mem::size_of::<WireEdge>(), 32);
         assert_eq!(
             core::mem::size_of::<WaypointSnapshot>(),
-            40 + 8 * 5 + 4 * 6 + 32 * MAX_NODES + 32 * MAX_EDGES
+            40 + 8 * 6 + 4 * 6 + 32 * MAX_NODES + 32 * MAX_EDGES
         );
-        assert_eq!(core::mem::size_of::<Plan>(), 40 + 8 * 9 + 4 * 8 + MAX_NODES);
+        assert_eq!(core::mem::size_of::<Plan>(), 40 + 8 * 10 + 4 * 8 + MAX_NODES);
         assert_eq!(core::mem::size_of::<RawPing>(), core::mem::size_of::<VehicleState>());
         assert_eq!(core::mem::size_of::<RawPong>(), core::mem::size_of::<Plan>());
         assert_eq!(

@@ -1,2 +1,4 @@
-//! `planner mission`: the three-process run, its report, log and plot.
+//! `planner mission`: the three-process run, its report, log and plot; and
+//! the entry points of the three-process subcommands.
+pub mod cli;
 pub mod world;

@@ -64,12 +64,15 @@ pub fn load_world(args: &ScenarioArgs) -> Result<Box<dyn SimWorld>, WorldError> 
 
 /// A chart-free network for tests: `n` waypoints in a square, start in one
 /// corner, goal in the opposite one, an edge between two waypoints when they
-/// are at most [`FixtureWorld::RANGE_M`] apart (so moving waypoints make and
-/// break edges), a fixed task per pair, and about a third of the waypoints
-/// dynamic within a bound (truncated normal by rejection, our simple stand-in
-/// for the chart scenario's model).
+/// are at most `range` apart (so moving waypoints make and break edges), a
+/// fixed task per pair, and about a third of the waypoints dynamic within a
+/// bound (truncated normal by rejection, our simple stand-in for the chart
+/// scenario's model). The range is [`FixtureWorld::RANGE_M`], or more when
+/// the static waypoints alone need more to join start and goal, so the goal
+/// stays reachable whatever the dynamic waypoints do.
 pub struct FixtureWorld {
     seed: u64,
+    range_m: f64,
     nominal: Vec<[f64; 3]>,
     pos: Vec<[f64; 3]>,
     bound_m: Vec<f64>,
@@ -105,7 +108,7 @@ impl FixtureWorld {
             };
             nominal.push(p);
         }
-        let bound_m = (0..n)
+        let bound_m: Vec<f64> = (0..n)
             .map(|i| {
                 if i != 0 && i != n - 1 && i % 3 == 1 {
                     rng.normal(0.0, 300.0).abs()
@@ -118,8 +121,10 @@ impl FixtureWorld {
         for _ in 0..n * (n - 1) / 2 {
             tasks.push((rng.uniform(1.0, 10.0), rng.uniform(0.1, 1.0), rng.uniform(120.0, 900.0)));
         }
+        let range_m = Self::RANGE_M.max(1.01 * static_bottleneck_m(&nominal, &bound_m));
         Ok(Self {
             seed,
+            range_m,
             pos: nominal.clone(),
             nominal,
             bound_m,
@@ -134,6 +139,35 @@ impl FixtureWorld {
     }
 }
 
+/// The smallest range that joins the first and the last waypoint through
+/// static waypoints only (a minimax path, dense Prim-style search on the
+/// plane).
+fn static_bottleneck_m(pos: &[[f64; 3]], bound_m: &[f64]) -> f64 {
+    let n = pos.len();
+    let usable: Vec<bool> = (0..n).map(|i| bound_m[i] <= 0.0).collect();
+    let d = |a: usize, b: usize| ((pos[a][0] - pos[b][0]).powi(2) + (pos[a][1] - pos[b][1]).powi(2)).sqrt();
+    let mut best = vec![f64::INFINITY; n];
+    let mut done = vec![false; n];
+    best[0] = 0.0;
+    loop {
+        let Some(u) = (0..n)
+            .filter(|&i| usable[i] && !done[i] && best[i].is_finite())
+            .min_by(|&a, &b| best[a].total_cmp(&best[b]))
+        else {
+            return f64::INFINITY;
+        };
+        if u == n - 1 {
+            return best[u];
+        }
+        done[u] = true;
+        for v in 0..n {
+            if usable[v] && !done[v] {
+                best[v] = best[v].min(best[u].max(d(u, v)));
+            }
+        }
+    }
+}
+
 impl SimWorld for FixtureWorld {
     fn fingerprint(&self) -> u64 {
         let mut h = 0x6669_7874_7572_6501u64 ^ self.seed;
@@ -142,6 +176,7 @@ impl SimWorld for FixtureWorld {
             h = splitmix64(&mut h);
         };
         mix(self.nominal.len() as u64);
+        mix(self.range_m.to_bits());
         for p in &self.nominal {
             for c in p {
                 mix(c.to_bits());
@@ -189,7 +224,7 @@ impl SimWorld for FixtureWorld {
         for a in 0..n {
             for b in a + 1..n {
                 let (dx, dy) = (self.pos[a][0] - self.pos[b][0], self.pos[a][1] - self.pos[b][1]);
-                if (dx * dx + dy * dy).sqrt() <= Self::RANGE_M {
+                if (dx * dx + dy * dy).sqrt() <= self.range_m {
                     let (priority, risk, task_time_s) = self.tasks[self.pair_index(a, b)];
                     edges.push(Edge {
                         a,
@@ -256,6 +291,22 @@ mod tests {
             w.redraw(epoch);
             let inst = w.snapshot();
             assert!(Problem::from_instance(&inst).is_ok(), "epoch {epoch}: goal unreachable");
+        }
+    }
+
+    #[test]
+    fn the_goal_is_reachable_for_every_seed() {
+        for seed in 0..50 {
+            for n in [4, 8, 12, 40] {
+                let mut w = FixtureWorld::new(n, seed).unwrap();
+                for epoch in 0..3 {
+                    w.redraw(epoch);
+                    assert!(
+                        Problem::from_instance(&w.snapshot()).is_ok(),
+                        "seed {seed}, {n} nodes, epoch {epoch}"
+                    );
+                }
+            }
         }
     }
 

@@ -53,6 +53,8 @@ pub struct PoolState {
     /// Head of the intrusive free list (each free block stores the next pointer).
     free: UnsafeCell<*mut u8>,
     steady: AtomicBool,
+    /// The steady state began and ended.
+    ended: AtomicBool,
     sys_allocs_total: AtomicU64,
     sys_allocs_steady: AtomicU64,
     sys_frees_steady: AtomicU64,
@@ -77,6 +79,7 @@ impl PoolState {
             lock: AtomicBool::new(false),
             free: UnsafeCell::new(ptr::null_mut()),
             steady: AtomicBool::new(false),
+            ended: AtomicBool::new(false),
             sys_allocs_total: AtomicU64::new(0),
             sys_allocs_steady: AtomicU64::new(0),
             sys_frees_steady: AtomicU64::new(0),
@@ -128,6 +131,14 @@ impl PoolState {
         self.steady.store(true, Ordering::SeqCst);
     }
 
+    /// Ends the steady state (before tear-down, which allocates and frees
+    /// by design); the steady counters keep their values.
+    pub fn end_steady_state(&self) {
+        if self.steady.swap(false, Ordering::SeqCst) {
+            self.ended.store(true, Ordering::SeqCst);
+        }
+    }
+
     /// The counters now.
     pub fn counters(&self) -> AllocCounters {
         AllocCounters {
@@ -138,7 +149,7 @@ impl PoolState {
             pool_high_water: self.pool_high_water.load(Ordering::Relaxed),
             pool_capacity: self.blocks.load(Ordering::Relaxed) as u64,
             pool_misses: self.pool_misses.load(Ordering::Relaxed),
-            steady: u64::from(self.steady.load(Ordering::Relaxed)),
+            steady: u64::from(self.steady.load(Ordering::Relaxed) || self.ended.load(Ordering::Relaxed)),
         }
     }
 
@@ -355,6 +366,11 @@ pub fn begin_steady_state() {
     STATE.begin_steady_state();
 }
 
+/// Ends the steady state (see [`PoolState::end_steady_state`]).
+pub fn end_steady_state() {
+    STATE.end_steady_state();
+}
+
 /// The counters now.
 pub fn counters() -> AllocCounters {
     STATE.counters()
@@ -384,12 +400,18 @@ mod tests {
             assert!(!s.in_pool(big));
             s.dealloc(big, l(4096));
         }
+        s.end_steady_state();
+        unsafe {
+            let after = s.alloc(l(4096));
+            s.dealloc(after, l(4096));
+        }
         let c = s.counters();
+        assert_eq!(c.steady, 1, "the counters still say a steady state was measured");
         assert_eq!(c.pool_allocs_steady, 2);
         assert_eq!(c.pool_high_water, 2);
         assert_eq!(c.sys_allocs_steady, 1, "the 4 KiB block went to the system allocator");
         assert_eq!(c.sys_frees_steady, 1);
-        assert_eq!(c.pool_misses, 1);
+        assert_eq!(c.pool_misses, 2, "misses count since start");
         assert_eq!(c.pool_capacity, 4);
     }
 

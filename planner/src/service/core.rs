@@ -524,6 +524,7 @@ impl PlannerCore {
         m.state_seq = r.state_seq;
         m.snapshot_epoch = r.epoch;
         m.trigger_sent_mono_ns = r.trigger_sent_ns;
+        m.trigger_received_mono_ns = received_ns;
         m.compute_ns = mono_now_ns().saturating_sub(received_ns);
         m.solve_ns = r.solve_ns;
         m.time_s = r.eval.time_s;
@@ -602,21 +603,22 @@ impl PlannerCore {
 }
 
 /// Copies the used part of a snapshot (the whole struct is 260 KiB; a
-/// 40-node network uses a few KiB of it).
+/// 40-node network uses a few KiB of it): every scalar field, then the used
+/// nodes and edges.
 pub fn copy_snapshot(src: &WaypointSnapshot, dst: &mut WaypointSnapshot) {
     let n = (src.node_count as usize).min(MAX_NODES);
     let m = (src.edge_count as usize).min(MAX_EDGES);
-    dst.header = src.header;
-    dst.epoch = src.epoch;
-    dst.speed_mps = src.speed_mps;
-    dst.time_available_s = src.time_available_s;
-    dst.phi1 = src.phi1;
-    dst.phi2 = src.phi2;
-    dst.objective = src.objective;
-    dst.node_count = src.node_count;
-    dst.edge_count = src.edge_count;
-    dst.start = src.start;
-    dst.goal = src.goal;
+    let scalars = core::mem::offset_of!(WaypointSnapshot, nodes);
+    // SAFETY: both point to whole snapshots; the first `scalars` bytes are
+    // the header and scalar fields (integers and floats), which any bytes
+    // form validly; source and destination do not overlap (& vs &mut).
+    unsafe {
+        core::ptr::copy_nonoverlapping(
+            (src as *const WaypointSnapshot).cast::<u8>(),
+            (dst as *mut WaypointSnapshot).cast::<u8>(),
+            scalars,
+        );
+    }
     dst.nodes[..n].copy_from_slice(&src.nodes[..n]);
     dst.edges[..m].copy_from_slice(&src.edges[..m]);
 }
@@ -735,6 +737,22 @@ mod tests {
         let r2 = c.replan().unwrap().unwrap();
         assert_eq!(r2.trigger, TriggerKind::EdgeLost);
         assert!(r2.route.len() < 2 || (r2.route.get(0), r2.route.get(1)) != (a, b));
+    }
+
+    #[test]
+    fn copying_a_snapshot_keeps_every_field_in_use() {
+        let inst = random_instance(15, 0.4, 9_000.0, 4);
+        let mut src = snapshot(&inst, 3);
+        src.next_update_s = 240.0;
+        src.phi1 = 0.5;
+        let mut dst = boxed_zeroed::<WaypointSnapshot>();
+        copy_snapshot(&src, &mut dst);
+        assert_eq!(dst.header, src.header);
+        assert_eq!((dst.epoch, dst.next_update_s, dst.phi1), (3, 240.0, 0.5));
+        assert_eq!(
+            crate::service::network::to_instance(&dst, "x"),
+            crate::service::network::to_instance(&src, "x")
+        );
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! planner binary installs to prove the steady state allocation-free, and
 //! [`standin`] is a small solver for the service's own tests.
 pub mod alloc;
+pub mod cli;
 pub mod core;
 pub mod network;
 pub mod run;

@@ -93,11 +93,31 @@ where
     OP: Outbox<Plan>,
     OS: Outbox<PlannerStatus>,
 {
-    let mut last_status_ns = 0u64;
     let warmup = core.config().warmup_plans;
     if warmup == 0 {
         alloc::begin_steady_state();
     }
+    let exit = service_loop(core, ports, events, keep_going, warmup);
+    alloc::end_steady_state();
+    exit
+}
+
+fn service_loop<W, IS, IW, OP, OS>(
+    core: &mut PlannerCore,
+    ports: &mut PlannerPorts<W, IS, IW, OP, OS>,
+    events: &mut dyn FnMut(&ServiceEvent),
+    keep_going: &mut dyn FnMut(&PlannerCore) -> bool,
+    warmup: u64,
+) -> Result<ExitReason, TransportError>
+where
+    W: Waker,
+    IS: Inbox<VehicleState>,
+    IW: Inbox<WaypointSnapshot>,
+    OP: Outbox<Plan>,
+    OS: Outbox<PlannerStatus>,
+{
+    let mut last_status_ns = 0u64;
+    let mut arm_steady = false;
     loop {
         if !keep_going(core) {
             return Ok(ExitReason::Stopped);
@@ -113,6 +133,13 @@ where
         let received_ns = mono_now_ns();
         let mut handled = ports.states.drain(&mut |s| core.on_state(s, events))?;
         handled += ports.snapshots.drain(&mut |s| core.on_snapshot(s, events))?;
+        if core.finished() {
+            // The peers leave now; their disconnection is tear-down, not
+            // steady state (a notifier reallocates its listener list).
+            alloc::end_steady_state();
+            ports.publish_status(core)?;
+            return Ok(ExitReason::Finished);
+        }
         if let Some(result) = core.replan() {
             handled += 1;
             if let Ok(r) = result {
@@ -120,19 +147,21 @@ where
                     .plans
                     .publish(&mut |m: &mut Plan| core.fill_plan(&r, received_ns, m))?;
                 core.published(&r, mono_now_ns(), events);
-                if core.counters().plans == warmup {
-                    alloc::begin_steady_state();
-                }
+                // Warm-up ends after the status that follows this plan: the
+                // first send of each port connects it to its consumers
+                // (iceoryx2 opens a notifier's listener connections lazily,
+                // which allocates).
+                arm_steady |= core.counters().plans == warmup;
             }
         }
         let now = mono_now_ns();
         if handled > 0 || now.saturating_sub(last_status_ns) >= HEARTBEAT.as_nanos() as u64 {
             ports.publish_status(core)?;
             last_status_ns = now;
-        }
-        if core.finished() {
-            ports.publish_status(core)?;
-            return Ok(ExitReason::Finished);
+            if arm_steady {
+                alloc::begin_steady_state();
+                arm_steady = false;
+            }
         }
     }
 }

@@ -35,6 +35,12 @@ use super::{Inbox, IpcOptions, OnTopic, Outbox, Role, SetupError, TransportError
 use super::{clock, signal};
 use crate::msg::zero_in_place;
 
+/// Shared-memory service flavour (between processes): what the binaries use.
+pub type Shm = iceoryx2::prelude::ipc::Service;
+
+/// In-process service flavour (no shared memory): for unit tests.
+pub type InProcess = iceoryx2::prelude::local::Service;
+
 /// Samples a subscriber queues before the oldest is overwritten.
 const SUBSCRIBER_BUFFER: usize = 2;
 /// Publishers per topic: one live plus one dead predecessor awaiting cleanup.

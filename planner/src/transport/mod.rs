@@ -310,6 +310,29 @@ impl IpcOptions {
     }
 }
 
+/// The transport flags every process takes.
+#[derive(Clone, Debug, PartialEq, clap::Args)]
+pub struct IpcArgs {
+    /// iceoryx2 isolation prefix of the run (default: $AUV_IPC_PREFIX, else `auv_`).
+    #[arg(long, value_name = "PREFIX")]
+    pub ipc_prefix: Option<String>,
+    /// Vehicle namespace in service names.
+    #[arg(long, default_value = "auv1")]
+    pub vehicle: String,
+    /// Busy-poll instead of blocking on events (latency benchmarking; every
+    /// process of the run must spin).
+    #[arg(long)]
+    pub spin: bool,
+}
+
+impl IpcArgs {
+    /// The validated options.
+    pub fn options(&self) -> Result<IpcOptions, SetupError> {
+        let mode = if self.spin { WaitMode::Spin } else { WaitMode::Event };
+        IpcOptions::new(self.ipc_prefix.as_deref(), &self.vehicle, mode)
+    }
+}
+
 /// A fresh isolation prefix for one run: `<tag><pid base36><counter>_`,
 /// short and unique among concurrently running tests and missions.
 pub fn unique_prefix(tag: &str) -> String {

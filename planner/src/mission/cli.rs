@@ -1,0 +1,21 @@
+//! The subcommands of the three-process system, ready for the `planner`
+//! command line to mount: `serve`, `mission`, `bench-latency` and the
+//! bench's hidden helper `bench-echo`.
+
+use std::process::ExitCode;
+
+use crate::service::cli::{ServeArgs, run_serve};
+
+/// The three-process system's subcommands.
+#[derive(Clone, Debug, clap::Subcommand)]
+pub enum IpcCommand {
+    /// Run the re-planning service as a process of its own.
+    Serve(ServeArgs),
+}
+
+/// Runs one of the subcommands.
+pub fn run(cmd: &IpcCommand) -> ExitCode {
+    match cmd {
+        IpcCommand::Serve(a) => run_serve(a),
+    }
+}
