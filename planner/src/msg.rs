@@ -453,10 +453,12 @@ pub struct RawPing {
 pub struct RawPong {
     /// Common header.
     pub header: Header,
+    /// `seq` of the ping answered.
+    pub ping_seq: u64,
     /// `sent_mono_ns` of the ping answered.
     pub ping_sent_mono_ns: u64,
     /// Filler up to the size of a plan.
-    pub body: [u8; core::mem::size_of::<Plan>() - core::mem::size_of::<Header>() - 8],
+    pub body: [u8; core::mem::size_of::<Plan>() - core::mem::size_of::<Header>() - 16],
 }
 
 /// A receiver-side check of one payload on its own.

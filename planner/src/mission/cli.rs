@@ -4,6 +4,7 @@
 
 use std::process::ExitCode;
 
+use super::bench::{BenchArgs, EchoArgs, run_bench, run_echo};
 use crate::service::cli::{ServeArgs, run_serve};
 
 /// The three-process system's subcommands.
@@ -11,11 +12,18 @@ use crate::service::cli::{ServeArgs, run_serve};
 pub enum IpcCommand {
     /// Run the re-planning service as a process of its own.
     Serve(ServeArgs),
+    /// Measure trigger → plan latency across processes next to a raw iceoryx2 ping-pong.
+    BenchLatency(BenchArgs),
+    /// (Used by bench-latency) answer raw pings.
+    #[command(hide = true)]
+    BenchEcho(EchoArgs),
 }
 
 /// Runs one of the subcommands.
 pub fn run(cmd: &IpcCommand) -> ExitCode {
     match cmd {
         IpcCommand::Serve(a) => run_serve(a),
+        IpcCommand::BenchLatency(a) => run_bench(a),
+        IpcCommand::BenchEcho(a) => run_echo(a),
     }
 }
