@@ -256,8 +256,8 @@ pub struct Plan {
     pub trigger_sent_mono_ns: u64,
     /// When the planner took the trigger off the transport, ns (monotonic).
     pub trigger_received_mono_ns: u64,
-    /// Time from the trigger's arrival at the planner to this plan being handed
-    /// to the transport, ns.
+    /// Time from the trigger's arrival at the planner to this plan being
+    /// filled (just before it is stamped and sent), ns.
     pub compute_ns: u64,
     /// Solver wall time, ns.
     pub solve_ns: u64,
@@ -371,7 +371,7 @@ pub struct AllocCounters {
     pub pool_high_water: u64,
     /// Pool blocks reserved at start-up.
     pub pool_capacity: u64,
-    /// Requests of the service thread since start that the pool could not
+    /// Steady-state requests of the service thread that the pool could not
     /// serve (too big or pool exhausted) and that went to the system allocator.
     pub pool_misses: u64,
     /// 1 once the steady state began (it stays 1 after it ended).
@@ -411,15 +411,15 @@ pub struct PlannerStatus {
     pub sensor_updates: u64,
     /// Sensor updates that did not change the plan enough to re-plan.
     pub updates_without_replan: u64,
-    /// Plans published later than the deadline after their trigger was sent.
+    /// Plans published later than the deadline after their trigger arrived.
     pub deadline_misses: u64,
     /// Plans whose solve the deadline cut short.
     pub deadline_cuts: u64,
     /// Plans that fell back to the quickest path (no feasible route).
     pub fallbacks: u64,
-    /// Latest trigger → publish latency, ns.
+    /// Latest trigger arrival → plan published latency, ns.
     pub last_latency_ns: u64,
-    /// Largest trigger → publish latency, ns.
+    /// Largest trigger arrival → plan published latency, ns.
     pub max_latency_ns: u64,
     /// The latency deadline, ns.
     pub deadline_ns: u64,

@@ -16,7 +16,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Parser;
-use planner::mission::world::{ScenarioArgs, SimWorld, load_world};
+use planner::mission::world::{MissionWorld, ScenarioArgs, load_world};
 use planner::msg::{Outcome, VehicleState, WaypointSnapshot};
 use planner::service::network::write_snapshot;
 use planner::transport::clock::mono_now_ns;
@@ -34,9 +34,9 @@ struct Args {
     ipc: IpcArgs,
     #[command(flatten)]
     scenario: ScenarioArgs,
-    /// Mission time between sensor updates, s.
-    #[arg(long, default_value_t = 60.0)]
-    sensor_period_s: f64,
+    /// Mission time between sensor updates, s (default: the scenario's).
+    #[arg(long)]
+    sensor_period_s: Option<f64>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -75,7 +75,7 @@ impl VehicleClock {
 
 fn publish(
     out: &mut IpcOutbox<Shm, WaypointSnapshot>,
-    world: &dyn SimWorld,
+    world: &MissionWorld,
     epoch: u64,
     period_s: f64,
 ) -> Result<(), Error> {
@@ -90,12 +90,12 @@ fn publish(
 }
 
 fn run(args: &Args) -> Result<Outcome, Error> {
-    let period = args.sensor_period_s;
+    signal::install();
+    let mut world = load_world(&args.scenario)?;
+    let period = args.sensor_period_s.unwrap_or(world.sensor_period_s());
     if !(period.is_finite() && period > 0.0) {
         return Err(Error::BadPeriod(period));
     }
-    signal::install();
-    let mut world = load_world(&args.scenario)?;
     let fingerprint = world.fingerprint();
     let opts = args.ipc.options()?;
     let ctx = IpcContext::<Shm>::new(&opts, "sensor-sim")?;
@@ -103,7 +103,7 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     let mut states = Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "sensor-sim");
     let mut waker = ctx.waker(Role::Sensor)?;
     let mut epoch = 0u64;
-    publish(&mut out, world.as_ref(), epoch, period)?;
+    publish(&mut out, &world, epoch, period)?;
     let mut clock: Option<VehicleClock> = None;
     let mut outcome = Outcome::Running;
     loop {
@@ -125,7 +125,7 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         while t >= (epoch + 1) as f64 * period {
             epoch += 1;
             world.redraw(epoch);
-            publish(&mut out, world.as_ref(), epoch, period)?;
+            publish(&mut out, &world, epoch, period)?;
         }
         let wait = match clock {
             Some(c) if c.time_scale > 0.0 => {

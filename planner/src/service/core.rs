@@ -12,7 +12,7 @@
 //! - Warm start: the remaining part of the previous plan, when it is still a
 //!   valid route of the new problem.
 //! - A solve runs the fixed iteration budget, cut at the deadline
-//!   (`trigger sent + deadline − publish margin`) unless cutting is off (the
+//!   (`trigger arrival + deadline − publish margin`) unless cutting is off (the
 //!   deterministic lockstep mode). The best route is always published: the
 //!   decoder only builds valid routes, and when nothing fits the budget it is
 //!   the quickest path to the goal, flagged `fallback`.
@@ -95,6 +95,8 @@ pub enum ServiceEvent {
     Arrival {
         /// Mission time, s.
         t: f64,
+        /// Where (x, y), m.
+        at: (f64, f64),
         /// The waypoint.
         node: u32,
         /// Tasks completed so far.
@@ -122,7 +124,7 @@ pub enum ServiceEvent {
         iterations: u32,
         /// Cut by the deadline.
         deadline_cut: bool,
-        /// Position (x, y) of the node planned from (for plots), m.
+        /// The vehicle's position (x, y) when the trigger was answered (for plots), m.
         at: (f64, f64),
     },
     /// The vehicle reported the end of the mission.
@@ -138,6 +140,9 @@ pub enum ServiceEvent {
 struct Pending {
     kind: TriggerKind,
     sent_ns: u64,
+    /// When the triggering message was taken off the transport: the
+    /// deadline counts from here (issue: "from the trigger's arrival").
+    received_ns: u64,
     mission_time_s: f64,
 }
 
@@ -193,9 +198,9 @@ pub struct ServiceCounters {
     pub fallbacks: u64,
     /// Triggers with no route at all (goal unreachable): nothing published.
     pub unplannable: u64,
-    /// Latest trigger → publish latency, ns.
+    /// Latest trigger arrival → plan published latency, ns.
     pub last_latency_ns: u64,
-    /// Largest trigger → publish latency, ns.
+    /// Largest trigger arrival → plan published latency, ns.
     pub max_latency_ns: u64,
 }
 
@@ -212,6 +217,8 @@ pub struct PlanResult {
     pub trigger: TriggerKind,
     /// `sent_mono_ns` of the trigger.
     pub trigger_sent_ns: u64,
+    /// When the trigger was taken off the transport (the deadline's origin), ns.
+    pub trigger_received_ns: u64,
     /// Vehicle's mission time of the trigger.
     pub mission_time_s: f64,
     /// Iterations run.
@@ -244,6 +251,7 @@ pub struct PlannerCore {
     answered_epoch: u64,
     finished: bool,
     warm: Route,
+    last_state: Box<VehicleState>,
 }
 
 /// Largest latency the histogram resolves, µs (one minute: anything above is a miss anyway).
@@ -270,6 +278,7 @@ impl PlannerCore {
             answered_epoch: 0,
             finished: false,
             warm: Route::new(),
+            last_state: boxed_zeroed(),
         }
     }
 
@@ -283,7 +292,7 @@ impl PlannerCore {
         &self.counters
     }
 
-    /// Trigger → publish latencies so far, µs.
+    /// Trigger arrival → plan published latencies so far, µs.
     pub fn latency_us(&self) -> &Histogram<u64> {
         &self.latency_us
     }
@@ -303,24 +312,37 @@ impl PlannerCore {
         self.have_snapshot.then_some(&*self.snapshot)
     }
 
-    fn trigger(&mut self, kind: TriggerKind, sent_ns: u64, mission_time_s: f64) {
+    fn trigger(&mut self, kind: TriggerKind, sent_ns: u64, received_ns: u64, mission_time_s: f64) {
         self.counters.triggers += 1;
         self.pending = Some(match self.pending {
             None => Pending {
                 kind,
                 sent_ns,
+                received_ns,
                 mission_time_s,
             },
             Some(p) => Pending {
                 kind: if rank(kind) > rank(p.kind) { kind } else { p.kind },
                 sent_ns: p.sent_ns.min(sent_ns),
+                received_ns: p.received_ns.min(received_ns),
                 mission_time_s: p.mission_time_s.max(mission_time_s),
             },
         });
     }
 
-    /// Handles an accepted vehicle state.
-    pub fn on_state(&mut self, s: &VehicleState, events: &mut dyn FnMut(&ServiceEvent)) {
+    /// The latest vehicle state accepted, if any.
+    pub fn last_state(&self) -> Option<&VehicleState> {
+        self.vehicle.known.then_some(&*self.last_state)
+    }
+
+    /// The vehicle's mission time as last reported, s.
+    pub fn mission_time_s(&self) -> f64 {
+        self.vehicle.mission_time_s
+    }
+
+    /// Handles an accepted vehicle state, taken off the transport at `received_ns`.
+    pub fn on_state(&mut self, s: &VehicleState, received_ns: u64, events: &mut dyn FnMut(&ServiceEvent)) {
+        *self.last_state = *s;
         let mut visited = NodeSet::EMPTY;
         for &id in crate::msg::route_ids(&s.route, s.route_len) {
             visited.insert(id as usize);
@@ -354,14 +376,15 @@ impl PlannerCore {
         if arrived {
             events(&ServiceEvent::Arrival {
                 t,
+                at: (s.position[0], s.position[1]),
                 node: s.to_node,
                 tasks: s.tasks_completed,
                 weight: s.weight,
                 time_left_s: s.time_left_s,
             });
-            self.trigger(TriggerKind::Arrival, s.header.sent_mono_ns, t);
+            self.trigger(TriggerKind::Arrival, s.header.sent_mono_ns, received_ns, t);
         } else if self.needs_initial_plan(s) {
-            self.trigger(TriggerKind::Initial, s.header.sent_mono_ns, t);
+            self.trigger(TriggerKind::Initial, s.header.sent_mono_ns, received_ns, t);
         }
         if self.pending.is_none() {
             self.answered_state = (s.header.session, s.header.seq);
@@ -376,15 +399,16 @@ impl PlannerCore {
         holding && self.plan.is_none_or(|p| p.key != key)
     }
 
-    /// Handles an accepted snapshot: keeps a copy and checks whether it
-    /// invalidates the current plan.
-    pub fn on_snapshot(&mut self, s: &WaypointSnapshot, events: &mut dyn FnMut(&ServiceEvent)) {
+    /// Handles an accepted snapshot, taken off the transport at
+    /// `received_ns`: keeps a copy and checks whether it invalidates the
+    /// current plan.
+    pub fn on_snapshot(&mut self, s: &WaypointSnapshot, received_ns: u64, events: &mut dyn FnMut(&ServiceEvent)) {
         copy_snapshot(s, &mut self.snapshot);
         self.have_snapshot = true;
         self.counters.sensor_updates += 1;
         let trigger = self.sensor_trigger();
         if let Some(kind) = trigger {
-            self.trigger(kind, s.header.sent_mono_ns, self.vehicle.mission_time_s);
+            self.trigger(kind, s.header.sent_mono_ns, received_ns, self.vehicle.mission_time_s);
         } else if self.plan.is_some() {
             self.counters.updates_without_replan += 1;
         }
@@ -469,7 +493,7 @@ impl PlannerCore {
         let mut rng = PlannerRng::new(derive_seed(self.cfg.seed, u64::from(replan)));
         let deadline = self.cfg.cut_at_deadline.then(|| {
             let stop_ns = pending
-                .sent_ns
+                .received_ns
                 .saturating_add((self.cfg.deadline.saturating_sub(self.cfg.publish_margin)).as_nanos() as u64);
             Instant::now() + Duration::from_nanos(stop_ns.saturating_sub(mono_now_ns()))
         });
@@ -508,6 +532,7 @@ impl PlannerCore {
             budget_s: budget,
             trigger: pending.kind,
             trigger_sent_ns: pending.sent_ns,
+            trigger_received_ns: pending.received_ns,
             mission_time_s: pending.mission_time_s,
             iterations: outcome.iterations,
             deadline_cut,
@@ -519,13 +544,13 @@ impl PlannerCore {
     }
 
     /// Writes a plan message for `r` (header's mission time included).
-    pub fn fill_plan(&self, r: &PlanResult, received_ns: u64, m: &mut Plan) {
+    pub fn fill_plan(&self, r: &PlanResult, m: &mut Plan) {
         m.header.mission_time_s = r.mission_time_s.max(0.0);
         m.state_seq = r.state_seq;
         m.snapshot_epoch = r.epoch;
         m.trigger_sent_mono_ns = r.trigger_sent_ns;
-        m.trigger_received_mono_ns = received_ns;
-        m.compute_ns = mono_now_ns().saturating_sub(received_ns);
+        m.trigger_received_mono_ns = r.trigger_received_ns;
+        m.compute_ns = mono_now_ns().saturating_sub(r.trigger_received_ns);
         m.solve_ns = r.solve_ns;
         m.time_s = r.eval.time_s;
         m.weight = r.eval.weight;
@@ -543,7 +568,8 @@ impl PlannerCore {
 
     /// Records that the plan for `r` was published at `published_ns`.
     pub fn published(&mut self, r: &PlanResult, published_ns: u64, events: &mut dyn FnMut(&ServiceEvent)) {
-        let latency = published_ns.saturating_sub(r.trigger_sent_ns);
+        // The deadline's latency: trigger arrival → plan published.
+        let latency = published_ns.saturating_sub(r.trigger_received_ns);
         self.counters.last_latency_ns = latency;
         self.counters.max_latency_ns = self.counters.max_latency_ns.max(latency);
         if latency > self.cfg.deadline.as_nanos() as u64 {
@@ -551,10 +577,7 @@ impl PlannerCore {
         }
         let us = (latency / 1000).clamp(1, LATENCY_MAX_US);
         let _ = self.latency_us.record(us);
-        let at = r.route.iter().next().map_or((0.0, 0.0), |id| {
-            let n = &self.snapshot.nodes[id];
-            (n.x, n.y)
-        });
+        let at = (self.last_state.position[0], self.last_state.position[1]);
         events(&ServiceEvent::Plan {
             t: r.mission_time_s,
             replan: r.replan,
@@ -683,10 +706,10 @@ mod tests {
         let inst = random_instance(20, 0.35, 20_000.0, 7);
         let mut c = core();
         let mut log = Vec::new();
-        c.on_state(&state(1, 0, 0, &[0], 20_000.0), &mut |e| log.push(*e));
+        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut |e| log.push(*e));
         assert!(c.has_pending());
         assert!(c.replan().is_none(), "no snapshot yet");
-        c.on_snapshot(&snapshot(&inst, 0), &mut |e| log.push(*e));
+        c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut |e| log.push(*e));
         let r = c.replan().unwrap().unwrap();
         assert_eq!(r.trigger, TriggerKind::Initial);
         assert_eq!(r.route.get(0), 0);
@@ -700,17 +723,17 @@ mod tests {
         let inst = random_instance(20, 0.35, 20_000.0, 8);
         let mut c = core();
         let mut sink = |_: &ServiceEvent| {};
-        c.on_snapshot(&snapshot(&inst, 0), &mut sink);
-        c.on_state(&state(1, 0, 0, &[0], 20_000.0), &mut sink);
+        c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
+        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
         let first = c.replan().unwrap().unwrap();
         let next = first.route.get(1) as u32;
         c.published(&first, mono_now_ns(), &mut sink);
         // Periodic state, no arrival: no trigger.
         let mut s = state(2, next, 0, &[0], 19_000.0);
         s.mode = VehicleMode::Travelling as u32;
-        c.on_state(&s, &mut sink);
+        c.on_state(&s, mono_now_ns(), &mut sink);
         assert!(!c.has_pending());
-        c.on_state(&state(3, next, 1, &[0, next as u8], 18_000.0), &mut sink);
+        c.on_state(&state(3, next, 1, &[0, next as u8], 18_000.0), mono_now_ns(), &mut sink);
         let r = c.replan().unwrap().unwrap();
         assert_eq!(r.trigger, TriggerKind::Arrival);
         assert_eq!(r.route.get(0), next as usize);
@@ -722,18 +745,18 @@ mod tests {
         let inst = random_instance(20, 0.35, 20_000.0, 9);
         let mut c = core();
         let mut sink = |_: &ServiceEvent| {};
-        c.on_snapshot(&snapshot(&inst, 0), &mut sink);
-        c.on_state(&state(1, 0, 0, &[0], 20_000.0), &mut sink);
+        c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
+        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
         let r = c.replan().unwrap().unwrap();
         c.published(&r, mono_now_ns(), &mut sink);
-        c.on_snapshot(&snapshot(&inst, 1), &mut sink);
+        c.on_snapshot(&snapshot(&inst, 1), mono_now_ns(), &mut sink);
         assert!(!c.has_pending(), "an identical network must not re-plan");
         assert_eq!(c.counters().updates_without_replan, 1);
         let (a, b) = (r.route.get(0), r.route.get(1));
         let mut cut = inst.clone();
         cut.edges
             .retain(|e| !((e.a == a && e.b == b) || (e.a == b && e.b == a)));
-        c.on_snapshot(&snapshot(&cut, 2), &mut sink);
+        c.on_snapshot(&snapshot(&cut, 2), mono_now_ns(), &mut sink);
         let r2 = c.replan().unwrap().unwrap();
         assert_eq!(r2.trigger, TriggerKind::EdgeLost);
         assert!(r2.route.len() < 2 || (r2.route.get(0), r2.route.get(1)) != (a, b));
@@ -761,8 +784,8 @@ mod tests {
         let plans = || {
             let mut c = core();
             let mut sink = |_: &ServiceEvent| {};
-            c.on_snapshot(&snapshot(&inst, 0), &mut sink);
-            c.on_state(&state(1, 0, 0, &[0], 15_000.0), &mut sink);
+            c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
+            c.on_state(&state(1, 0, 0, &[0], 15_000.0), mono_now_ns(), &mut sink);
             c.replan().unwrap().unwrap().route
         };
         assert_eq!(plans(), plans());

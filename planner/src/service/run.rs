@@ -131,8 +131,10 @@ where
             Wake::Woken(_) => {}
         }
         let received_ns = mono_now_ns();
-        let mut handled = ports.states.drain(&mut |s| core.on_state(s, events))?;
-        handled += ports.snapshots.drain(&mut |s| core.on_snapshot(s, events))?;
+        let mut handled = ports.states.drain(&mut |s| core.on_state(s, received_ns, events))?;
+        handled += ports
+            .snapshots
+            .drain(&mut |s| core.on_snapshot(s, received_ns, events))?;
         if core.finished() {
             // The peers leave now; their disconnection is tear-down, not
             // steady state (a notifier reallocates its listener list).
@@ -143,9 +145,7 @@ where
         if let Some(result) = core.replan() {
             handled += 1;
             if let Ok(r) = result {
-                ports
-                    .plans
-                    .publish(&mut |m: &mut Plan| core.fill_plan(&r, received_ns, m))?;
+                ports.plans.publish(&mut |m: &mut Plan| core.fill_plan(&r, m))?;
                 core.published(&r, mono_now_ns(), events);
                 // Warm-up ends after the status that follows this plan: the
                 // first send of each port connects it to its consumers

@@ -1,0 +1,251 @@
+//! Multi-process tests: the real `planner`, `sensor-sim` and `vehicle-sim`
+//! binaries over iceoryx2, each test in its own isolation prefix so they run
+//! in parallel. Lockstep and small scenarios keep them short.
+
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use auv_system::{binary, leftovers, prefix, read_json, run, temp_dir, wait_with_watchdog};
+
+const LIMIT: Duration = Duration::from_secs(240);
+
+/// Runs a lockstep mission; returns (report, mission.log bytes).
+fn lockstep_mission(seed: u64, planner_seed: u64, nodes: u32, extra: &[&str]) -> (serde_json::Value, Vec<u8>, String) {
+    let out = temp_dir("m");
+    let p = prefix("t");
+    let (seed, planner_seed, nodes) = (seed.to_string(), planner_seed.to_string(), nodes.to_string());
+    let out_s = out.display().to_string();
+    let mut args = vec![
+        "mission",
+        "--lockstep",
+        "--quiet",
+        "--seed",
+        &seed,
+        "--planner-seed",
+        &planner_seed,
+        "--nodes",
+        &nodes,
+        "--out",
+        &out_s,
+        "--ipc-prefix",
+        &p,
+    ];
+    args.extend_from_slice(extra);
+    let o = run(&binary("planner"), &args, LIMIT);
+    assert!(
+        o.status.success(),
+        "mission failed: {}\n{}",
+        o.status,
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let report = read_json(&out.join("report.json"));
+    let log = std::fs::read(out.join("mission.log")).expect("mission.log");
+    assert!(out.join("mission.svg").is_file(), "no plot");
+    (report, log, p)
+}
+
+#[test]
+fn lockstep_mission_reaches_the_goal_feasibly_without_steady_state_allocations() {
+    let (r, log, p) = lockstep_mission(1, 1, 12, &[]);
+    assert_eq!(r["goal_reached"], true, "{r:#}");
+    let used = r["time_used_s"].as_f64().unwrap();
+    assert!(used > 0.0 && used <= r["time_available_s"].as_f64().unwrap(), "{r:#}");
+    let route: Vec<u64> = r["route"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert_eq!(route.first(), Some(&0));
+    assert_eq!(route.last(), Some(&11));
+    // Every edge travelled completed its task, and no waypoint twice.
+    assert_eq!(r["tasks_completed"].as_u64().unwrap() as usize, route.len() - 1);
+    let mut seen = route.clone();
+    seen.sort_unstable();
+    seen.dedup();
+    assert_eq!(seen.len(), route.len());
+    assert!(r["weight"].as_f64().unwrap() > 0.0);
+    assert!(r["replans"].as_u64().unwrap() >= 1);
+    assert!(r["sensor_updates"].as_u64().unwrap() >= 1);
+    assert_eq!(r["rejected_messages"], 0);
+    // Zero system-allocator calls in steady state, measured (not skipped):
+    // the counting allocator is installed, the steady state happened, and
+    // the pool really served iceoryx2's loans.
+    let a = &r["allocations"];
+    assert_eq!(a["allocator_installed"], true, "{a:#}");
+    assert_eq!(a["steady_state_measured"], true, "{a:#}");
+    assert_eq!(r["steady_state_allocations"], 0, "{a:#}");
+    assert_eq!(a["system_frees_steady"], 0, "{a:#}");
+    assert!(a["pool_allocs_steady"].as_u64().unwrap() > 0, "{a:#}");
+    // The log has every kind of event.
+    let text = String::from_utf8(log).unwrap();
+    for kind in ["sensor_update", "trigger", "plan", "arrival", "finished"] {
+        assert!(text.contains(&format!("\"event\":\"{kind}\"")), "no {kind} event");
+    }
+    assert_eq!(r["shm_files_left"], 0);
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+}
+
+#[test]
+fn same_seeds_give_a_byte_identical_mission_log() {
+    let (_, a, _) = lockstep_mission(3, 7, 10, &[]);
+    let (_, b, _) = lockstep_mission(3, 7, 10, &[]);
+    assert!(!a.is_empty());
+    assert!(a == b, "two lockstep runs with the same seeds wrote different logs");
+    let (_, c, _) = lockstep_mission(4, 7, 10, &[]);
+    assert!(a != c, "another scenario seed should give another mission");
+}
+
+#[test]
+fn plans_are_published_within_the_deadline() {
+    // Lockstep with the deadline enforced: solves are cut at the deadline.
+    // On a shared 2-core machine a few plans may be preempted past it; the
+    // issue's target (zero misses over 10 000 triggers) is measured by
+    // `planner bench-latency` on a release build, not asserted here.
+    let (r, _, _) = lockstep_mission(2, 1, 12, &["--enforce-deadline", "--deadline-ms", "20"]);
+    let plans = r["plans"].as_u64().unwrap();
+    let misses = r["deadline_misses"].as_u64().unwrap();
+    assert!(plans > 0);
+    assert!(
+        misses * 100 <= plans,
+        "{misses} of {plans} plans missed the deadline: {r:#}"
+    );
+    assert!(r["plan_latency_us"]["p50"].as_u64().unwrap() <= 20_000, "{r:#}");
+    assert_eq!(r["steady_state_allocations"], 0);
+}
+
+#[test]
+fn ctrl_c_stops_all_three_and_leaves_no_shared_memory() {
+    use std::os::unix::process::CommandExt;
+    let out = temp_dir("c");
+    let p = prefix("t");
+    // Scaled time (a slow mission) so the interrupt lands mid-run.
+    let child = Command::new(binary("planner"))
+        .args([
+            "mission",
+            "--quiet",
+            "--nodes",
+            "12",
+            "--time-scale",
+            "200",
+            "--ipc-prefix",
+            &p,
+            "--out",
+        ])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .process_group(0)
+        .spawn()
+        .expect("start the mission");
+    let pgid = child.id() as i32;
+    // Wait until the planner has planned (the log has a plan), then press Ctrl-C.
+    let t0 = std::time::Instant::now();
+    while !std::fs::read_to_string(out.join("mission.log")).is_ok_and(|l| l.contains("\"plan\"")) {
+        assert!(t0.elapsed() < LIMIT, "no plan within {LIMIT:?}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // SAFETY: SIGINT to the process group we created, as a terminal's Ctrl-C does.
+    unsafe { libc::kill(-pgid, libc::SIGINT) };
+    let o = wait_with_watchdog(child, Duration::from_secs(60));
+    assert_eq!(o.status.code(), Some(130), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_json(&out.join("report.json"));
+    assert_eq!(r["outcome"], "aborted");
+    assert_eq!(r["shm_files_left"], 0);
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+}
+
+#[test]
+fn a_process_of_another_scenario_is_refused_with_a_clear_error() {
+    let p = prefix("t");
+    let planner = Command::new(binary("planner"))
+        .args([
+            "serve",
+            "--nodes",
+            "12",
+            "--seed",
+            "1",
+            "--lockstep",
+            "--ipc-prefix",
+            &p,
+        ])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let sensor = Command::new(binary("sensor-sim"))
+        .args(["--nodes", "12", "--seed", "2", "--ipc-prefix", &p])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let v = run(
+        &binary("vehicle-sim"),
+        &[
+            "--nodes",
+            "12",
+            "--seed",
+            "1",
+            "--lockstep",
+            "--answer-timeout-s",
+            "3",
+            "--ipc-prefix",
+            &p,
+        ],
+        LIMIT,
+    );
+    // The vehicle (seed 1) refuses the sensor's snapshots (seed 2) and never starts.
+    assert_eq!(v.status.code(), Some(1));
+    let verr = String::from_utf8_lossy(&v.stderr);
+    assert!(verr.contains("another scenario"), "{verr}");
+    for c in [&planner, &sensor] {
+        // SAFETY: SIGINT to our own children.
+        unsafe { libc::kill(c.id() as i32, libc::SIGINT) };
+    }
+    let po = wait_with_watchdog(planner, Duration::from_secs(30));
+    let so = wait_with_watchdog(sensor, Duration::from_secs(30));
+    let perr = String::from_utf8_lossy(&po.stderr);
+    assert!(
+        perr.contains("refusing waypoint snapshot from another scenario"),
+        "{perr}"
+    );
+    assert_eq!(po.status.code(), Some(130));
+    assert_eq!(so.status.code(), Some(130));
+    // No process of the domain is alive: retire it, then nothing may remain.
+    planner::transport::ipc::retire_domain(&p).unwrap();
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+}
+
+#[test]
+fn bench_latency_reports_both_distributions_as_json() {
+    let o = run(
+        &binary("planner"),
+        &[
+            "bench-latency",
+            "--triggers",
+            "40",
+            "--warmup",
+            "5",
+            "--nodes",
+            "12",
+            "--json",
+        ],
+        LIMIT,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert_eq!(v["triggers"], 40);
+    assert_eq!(v["deadline_ms"], 20.0);
+    for key in ["plan_us", "raw_us"] {
+        for q in ["p50", "p99", "p999", "max"] {
+            assert!(v[key][q].as_f64().is_some_and(|x| x > 0.0), "{key}.{q}: {v:#}");
+        }
+        assert_eq!(v[key]["count"], 40);
+    }
+    assert!(v["deadline_misses"].as_u64().is_some());
+    assert_eq!(v["planner"]["steady_state_allocations"], 0, "{v:#}");
+    assert_eq!(v["shm_leftovers"], 0);
+}
