@@ -165,3 +165,81 @@ where
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixtures::random_instance;
+    use crate::msg::{Outcome, PlannerPhase, VehicleMode};
+    use crate::service::core::ServiceConfig;
+    use crate::service::network::write_snapshot;
+    use crate::service::standin::RandomKeySearch;
+    use crate::transport::ipc::{InProcess, IpcContext, Stamp};
+    use crate::transport::{IpcOptions, Role, WaitMode, unique_prefix};
+
+    #[test]
+    fn the_loop_answers_a_vehicle_with_a_plan_then_a_status_and_stops_when_it_finishes() {
+        let opts = IpcOptions::new(Some(&unique_prefix("r")), "loop", WaitMode::Event).unwrap();
+        let ctx = IpcContext::<InProcess>::new(&opts, "test").unwrap();
+        let fp = 77;
+        let mut ports = PlannerPorts {
+            waker: ctx.waker(Role::Planner).unwrap(),
+            states: Guarded::new(ctx.inbox::<VehicleState>().unwrap(), fp, "planner"),
+            snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>().unwrap(), fp, "planner"),
+            plans: ctx.outbox::<Plan>(Stamp::new(fp)).unwrap(),
+            status: ctx.outbox::<PlannerStatus>(Stamp::new(fp)).unwrap(),
+        };
+        // The peers: a sensor, a vehicle, and one foreign sender.
+        let mut snap_out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();
+        let mut state_out = ctx.outbox::<VehicleState>(Stamp::new(fp)).unwrap();
+        let mut foreign = ctx.outbox::<VehicleState>(Stamp::new(fp + 1)).unwrap();
+        let mut plans_in = ctx.inbox::<Plan>().unwrap();
+        let mut status_in = ctx.inbox::<PlannerStatus>().unwrap();
+        let inst = random_instance(15, 0.4, 20_000.0, 2);
+        snap_out.publish(&mut |m| write_snapshot(&inst, 0, m).unwrap()).unwrap();
+        let vehicle = |m: &mut VehicleState| {
+            m.time_left_s = 20_000.0;
+            m.mode = VehicleMode::NoPlan as u32;
+            m.route_len = 1;
+        };
+        foreign.publish(&mut |m| vehicle(m)).unwrap();
+        let seq = state_out.publish(&mut |m| vehicle(m)).unwrap();
+        let cfg = ServiceConfig {
+            fingerprint: fp,
+            cut_at_deadline: false,
+            iterations: 10,
+            ..ServiceConfig::default()
+        };
+        let mut core = PlannerCore::new(cfg, Box::new(RandomKeySearch::new(5)));
+        let mut rounds = 0;
+        let exit = run_service(&mut core, &mut ports, &mut |_| {}, &mut |c| {
+            rounds += 1;
+            c.counters().plans == 0 && rounds < 100
+        })
+        .unwrap();
+        assert_eq!(exit, ExitReason::Stopped);
+        let mut plan = None;
+        plans_in.drain(&mut |p: &Plan| plan = Some(*p)).unwrap();
+        let plan = plan.expect("a plan");
+        assert_eq!(plan.state_seq, seq);
+        assert_eq!(plan.route[0], 0);
+        assert_eq!(plan.route[plan.route_len as usize - 1] as usize, inst.goal);
+        // Status goes out after the plan and answers the vehicle's state.
+        let mut status = None;
+        status_in.drain(&mut |s: &PlannerStatus| status = Some(*s)).unwrap();
+        let status = status.expect("a status");
+        assert_eq!(status.handled_state_seq, seq);
+        assert_eq!(status.plans, 1);
+        assert_eq!(status.phase, PlannerPhase::Running as u32);
+        assert_eq!(status.rejected[crate::msg::RejectKind::ForeignScenario as usize], 1);
+        // The vehicle reports the end: the loop returns.
+        state_out
+            .publish(&mut |m| {
+                vehicle(m);
+                m.outcome = Outcome::GoalReached as u32;
+            })
+            .unwrap();
+        let exit = run_service(&mut core, &mut ports, &mut |_| {}, &mut |_| true).unwrap();
+        assert_eq!(exit, ExitReason::Finished);
+    }
+}
