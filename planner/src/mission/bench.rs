@@ -58,6 +58,9 @@ pub struct BenchArgs {
     /// Solver iterations per plan (cut at the deadline).
     #[arg(long, default_value_t = 150)]
     pub iterations: u32,
+    /// Run the planner's service thread under SCHED_FIFO at this priority.
+    #[arg(long, value_name = "PRIO")]
+    pub rt_priority: Option<i32>,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub scenario: ScenarioArgs,
@@ -257,6 +260,9 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
     .map(|s| s.to_string())
     .collect();
     args.extend(a.scenario.to_flags());
+    if let Some(p) = a.rt_priority {
+        args.extend(["--rt-priority".to_string(), p.to_string()]);
+    }
     if opts.mode == WaitMode::Spin {
         args.push("--spin".into());
     }
@@ -406,6 +412,7 @@ fn bench(a: &BenchArgs) -> Result<serde_json::Value, BenchError> {
         "spin": a.spin,
         "world": world_desc,
         "iterations_budget": a.iterations,
+        "rt_priority": a.rt_priority,
         "iterations_mean": run.iterations as f64 / n as f64,
         "payload_bytes": {
             "trigger": core::mem::size_of::<VehicleState>(),

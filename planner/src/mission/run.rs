@@ -134,8 +134,9 @@ fn service_thread(
     cfg: ServiceConfig,
     events: &mut dyn FnMut(&ServiceEvent),
     shared: &Shared,
+    rt_priority: Option<i32>,
 ) -> Result<ServiceResult, ServeError> {
-    prepare_service_thread();
+    prepare_service_thread(rt_priority)?;
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint)?;
     let mut core = PlannerCore::new(cfg, make_solver());
@@ -429,6 +430,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let mut log_error = None;
     let mut child_error = None;
 
+    let rt_priority = a.service.rt_priority;
     let result = std::thread::scope(|scope| {
         let shared = &shared;
         let opts = &opts;
@@ -442,7 +444,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
                     std::thread::yield_now();
                 }
             };
-            let r = service_thread(opts, fingerprint, cfg, &mut events, shared);
+            let r = service_thread(opts, fingerprint, cfg, &mut events, shared, rt_priority);
             alloc::end_steady_state();
             r
         });

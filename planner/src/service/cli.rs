@@ -30,6 +30,11 @@ pub struct ServiceArgs {
     /// Seed of the planner's random draws.
     #[arg(long, default_value_t = 1)]
     pub planner_seed: u64,
+    /// Run the service thread under SCHED_FIFO with this priority (1..=99),
+    /// so other work on the machine cannot preempt a solve past its
+    /// deadline (needs CAP_SYS_NICE or root).
+    #[arg(long, value_name = "PRIO")]
+    pub rt_priority: Option<i32>,
 }
 
 /// `planner serve` flags.
@@ -122,10 +127,28 @@ pub fn open_ports(ctx: &IpcContext<Shm>, fingerprint: u64) -> Result<ShmPlannerP
 }
 
 /// Prepares the calling thread as the service thread: counted by the
-/// allocator and served from its pool.
-pub fn prepare_service_thread() {
+/// allocator and served from its pool, and with `rt_priority`, scheduled
+/// SCHED_FIFO at that priority.
+pub fn prepare_service_thread(rt_priority: Option<i32>) -> Result<(), ServeError> {
     alloc::watch_this_thread();
     alloc::reserve_pool();
+    if let Some(prio) = rt_priority {
+        if !(1..=99).contains(&prio) {
+            return Err(ServeError::Usage(format!(
+                "--rt-priority {prio}: must be between 1 and 99"
+            )));
+        }
+        let param = libc::sched_param { sched_priority: prio };
+        // SAFETY: pthread_self() is this thread; `param` is a valid sched_param.
+        let rc = unsafe { libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &param) };
+        if rc != 0 {
+            return Err(ServeError::Usage(format!(
+                "--rt-priority {prio}: SCHED_FIFO refused ({}); it needs CAP_SYS_NICE or root",
+                std::io::Error::from_raw_os_error(rc)
+            )));
+        }
+    }
+    Ok(())
 }
 
 fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
@@ -135,7 +158,7 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     drop(world);
     let cfg = args.service.config(fingerprint, args.lockstep)?;
     let opts = args.ipc.options()?;
-    prepare_service_thread();
+    prepare_service_thread(args.service.rt_priority)?;
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint)?;
     let mut core = PlannerCore::new(cfg, make_solver());
