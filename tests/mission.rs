@@ -97,20 +97,38 @@ fn same_seeds_give_a_byte_identical_mission_log() {
 }
 
 #[test]
-fn plans_are_published_within_the_deadline() {
-    // Lockstep with the deadline enforced: solves are cut at the deadline.
-    // On a shared 2-core machine a few plans may be preempted past it; the
-    // issue's target (zero misses over 10 000 triggers) is measured by
-    // `planner bench-latency` on a release build, not asserted here.
-    let (r, _, _) = lockstep_mission(2, 1, 12, &["--enforce-deadline", "--deadline-ms", "20"]);
+fn solves_are_cut_at_the_deadline_and_plans_published_within_it() {
+    // An iteration budget no solve can finish: every plan must come from the
+    // anytime path, stopped by the deadline (lower bound: it used the time),
+    // and published within it. The shared 2-core machine preempts some plans
+    // past the deadline (seen: 3 of 22 at load average 6), hence a loose
+    // tolerance on the misses, while the median must be in time; the
+    // issue's zero-miss target is measured by `planner bench-latency`.
+    let (r, _, _) = lockstep_mission(
+        2,
+        1,
+        10,
+        &[
+            "--enforce-deadline",
+            "--deadline-ms",
+            "50",
+            "--iterations",
+            "100000000",
+            "--time-available-s",
+            "9000",
+        ],
+    );
     let plans = r["plans"].as_u64().unwrap();
-    let misses = r["deadline_misses"].as_u64().unwrap();
     assert!(plans > 0);
+    assert_eq!(r["deadline_cuts"], plans, "every solve ends at the deadline: {r:#}");
+    let p50 = r["plan_latency_us"]["p50"].as_u64().unwrap();
+    assert!(p50 >= 40_000, "solves stopped early: {r:#}");
+    assert!(p50 <= 50_000, "the typical plan is late: {r:#}");
+    let misses = r["deadline_misses"].as_u64().unwrap();
     assert!(
-        misses * 100 <= plans,
+        misses * 4 <= plans,
         "{misses} of {plans} plans missed the deadline: {r:#}"
     );
-    assert!(r["plan_latency_us"]["p50"].as_u64().unwrap() <= 20_000, "{r:#}");
     assert_eq!(r["steady_state_allocations"], 0);
 }
 

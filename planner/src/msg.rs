@@ -427,10 +427,12 @@ pub struct PlannerStatus {
     pub alloc: AllocCounters,
     /// Rejected input messages by [`RejectKind`].
     pub rejected: [u64; REJECT_KINDS],
+    /// Solver iterations summed over all plans.
+    pub iterations_total: u64,
     /// [`PlannerPhase`].
     pub phase: u32,
-    /// Explicit padding.
-    pub _pad: u32,
+    /// Solver iterations of the latest plan.
+    pub last_iterations: u32,
 }
 
 /// Latency bench only: a raw ping of the same size as a [`VehicleState`],

@@ -33,6 +33,8 @@ pub struct Report {
     pub deadline_cuts: u64,
     /// Plans that fell back to the quickest path.
     pub fallbacks: u64,
+    /// Solver iterations over all plans.
+    pub iterations_total: u64,
     /// The planner's allocation counters.
     pub alloc: AllocCounters,
     /// Whether the planner ran on the counting allocator.
@@ -92,6 +94,10 @@ impl Report {
             "deadline_misses": self.deadline_misses,
             "deadline_cuts": self.deadline_cuts,
             "fallback_plans": self.fallbacks,
+            "solver_iterations": {
+                "total": self.iterations_total,
+                "mean_per_plan": self.iterations_total as f64 / self.plans.max(1) as f64,
+            },
             "steady_state_allocations": self.alloc.sys_allocs_steady,
             "allocations": {
                 "allocator_installed": self.allocator_installed,

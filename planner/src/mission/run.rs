@@ -548,6 +548,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         deadline_misses: c.deadline_misses,
         deadline_cuts: c.deadline_cuts,
         fallbacks: c.fallbacks,
+        iterations_total: c.iterations_total,
         alloc: alloc::counters(),
         allocator_installed: alloc::installed(),
         sensor_updates: c.sensor_updates,

@@ -202,6 +202,10 @@ pub struct ServiceCounters {
     pub last_latency_ns: u64,
     /// Largest trigger arrival → plan published latency, ns.
     pub max_latency_ns: u64,
+    /// Solver iterations of the latest plan.
+    pub last_iterations: u32,
+    /// Solver iterations over all plans.
+    pub iterations_total: u64,
 }
 
 /// Everything a re-plan produced, ready to publish.
@@ -521,6 +525,8 @@ impl PlannerCore {
             key: (self.vehicle.session, self.vehicle.arrivals, start),
         });
         self.counters.plans += 1;
+        self.counters.last_iterations = outcome.iterations;
+        self.counters.iterations_total += u64::from(outcome.iterations);
         let deadline_cut = outcome.stop == StopReason::Deadline;
         self.counters.deadline_cuts += u64::from(deadline_cut);
         self.counters.fallbacks += u64::from(!eval.feasible);
@@ -610,6 +616,8 @@ impl PlannerCore {
         m.deadline_ns = self.cfg.deadline.as_nanos() as u64;
         m.alloc = super::alloc::counters();
         m.rejected = rejected.0;
+        m.iterations_total = c.iterations_total;
+        m.last_iterations = c.last_iterations;
         m.phase = if self.finished {
             PlannerPhase::Finished
         } else if self.plan.is_some() {
