@@ -71,10 +71,12 @@
 
 mod config;
 mod fingerprint;
+mod map;
 pub mod synthetic;
 
 pub use config::{ChartSource, ConfigError, MAX_K, SCENARIO_FORMAT, ScenarioConfig, UniformRange};
 pub use fingerprint::{CHART_SAMPLE_GRID, Fnv1a, fnv1a64, scenario_fingerprint};
+pub use map::{EMBEDDED_CHART_NAME, LoadError, STREAM_CHART, ScenarioMap, chart_spec, load_map, load_world};
 
 use crate::chart::WaterMap;
 use crate::instance::{Edge, Instance, Node};
