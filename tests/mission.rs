@@ -125,16 +125,19 @@ fn solves_are_cut_at_the_deadline_and_plans_published_within_it() {
     // The service thread runs SCHED_FIFO (as a real-time planner would):
     // without it, other work on this shared 2-core machine preempts plans
     // past the deadline (seen: 17 of 22 late by ~1 ms at load average 5;
-    // with it, 0 of 22, max 49.6 ms). Where SCHED_FIFO is not permitted the
+    // with it, none). Where SCHED_FIFO is not permitted the
     // test checks only what does not depend on the machine's load.
+    // Few plans (about 15 × 20 ms): a real-time thread busy for most of a
+    // second is throttled by the kernel (sched_rt_runtime_us, 95 %), which
+    // a real mission never is.
     let args = [
         "--enforce-deadline",
         "--deadline-ms",
-        "50",
+        "20",
         "--iterations",
         "100000000",
         "--time-available-s",
-        "9000",
+        "6000",
     ];
     let mut rt = args.to_vec();
     rt.extend(["--rt-priority", "10"]);
@@ -150,10 +153,10 @@ fn solves_are_cut_at_the_deadline_and_plans_published_within_it() {
     assert!(plans > 0);
     assert_eq!(r["deadline_cuts"], plans, "every solve ends at the deadline: {r:#}");
     let p50 = r["plan_latency_us"]["p50"].as_u64().unwrap();
-    assert!(p50 >= 40_000, "solves stopped early: {r:#}");
+    assert!(p50 >= 15_000, "solves stopped early: {r:#}");
     if realtime {
         assert_eq!(r["deadline_misses"], 0, "{r:#}");
-        assert!(r["plan_latency_us"]["max"].as_u64().unwrap() <= 50_000, "{r:#}");
+        assert!(r["plan_latency_us"]["max"].as_u64().unwrap() <= 20_000, "{r:#}");
     }
     assert_eq!(r["steady_state_allocations"], 0);
 }

@@ -11,11 +11,9 @@
 
 use std::path::PathBuf;
 
-use crate::chart::WaterMap;
 use crate::instance::Instance;
 use crate::problem::MAX_NODES;
-use crate::scenario::synthetic::GridMap;
-use crate::scenario::{ChartSource, ConfigError, RedrawReport, ScenarioConfig, ScenarioError, World};
+use crate::scenario::{ChartSource, ConfigError, LoadError, RedrawReport, ScenarioConfig, ScenarioMap, World};
 
 /// How a process picks its world (flags shared by all three binaries).
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -83,82 +81,33 @@ pub enum WorldError {
     /// The scenario file or an override is invalid.
     #[error("scenario: {0}")]
     Config(#[from] ConfigError),
-    /// The generator failed.
+    /// The chart or the generator failed.
     #[error("scenario: {0}")]
-    Scenario(#[from] ScenarioError),
-    /// The named chart is not available in this build.
-    #[error("chart {0}: not available in this build (only the embedded benoits-cove stand-in is)")]
-    NoChart(String),
-}
-
-/// The water map behind a world.
-pub enum Map {
-    /// The synthetic 5 km × 10 km stand-in for Benoit's Cove
-    /// (`scenario::synthetic::GridMap::cove`), used until the chart module
-    /// provides the real one.
-    SyntheticCove(GridMap),
-}
-
-impl Map {
-    fn build(source: &ChartSource) -> Result<Self, WorldError> {
-        match source {
-            ChartSource::Embedded(name) if name == "benoits-cove" => Ok(Self::SyntheticCove(GridMap::cove())),
-            ChartSource::Embedded(name) => Err(WorldError::NoChart(name.clone())),
-            ChartSource::Png { path, .. } => Err(WorldError::NoChart(path.display().to_string())),
-        }
-    }
-
-    /// One-line description for reports.
-    pub fn describe(&self) -> &'static str {
-        match self {
-            Self::SyntheticCove(_) => "benoits-cove (synthetic stand-in)",
-        }
-    }
-}
-
-impl WaterMap for Map {
-    fn width_m(&self) -> f64 {
-        match self {
-            Self::SyntheticCove(m) => m.width_m(),
-        }
-    }
-    fn height_m(&self) -> f64 {
-        match self {
-            Self::SyntheticCove(m) => m.height_m(),
-        }
-    }
-    fn is_water(&self, x: f64, y: f64) -> bool {
-        match self {
-            Self::SyntheticCove(m) => m.is_water(x, y),
-        }
-    }
-    fn segment_over_water(&self, a: (f64, f64), b: (f64, f64)) -> bool {
-        match self {
-            Self::SyntheticCove(m) => m.segment_over_water(a, b),
-        }
-    }
+    Load(#[from] LoadError),
 }
 
 /// A scenario world with its chart.
 pub struct MissionWorld {
     world: World,
-    map: Map,
+    map: ScenarioMap,
+    chart: String,
     name: String,
 }
 
-/// Builds the world the flags name.
+/// Builds the world the flags name (chart loaded and classified by
+/// [`crate::scenario::load_world`], the one place that does it).
 pub fn load_world(args: &ScenarioArgs) -> Result<MissionWorld, WorldError> {
     let cfg = args.config()?;
-    let map = Map::build(&cfg.chart)?;
-    let world = World::generate(&cfg, args.seed, &map)?;
+    let (world, map) = crate::scenario::load_world(&cfg, args.seed)?;
+    let chart = match &cfg.chart {
+        ChartSource::Embedded(name) => name.clone(),
+        ChartSource::Png { path, .. } => path.display().to_string(),
+    };
     Ok(MissionWorld {
-        name: format!(
-            "{}-seed-{}",
-            map.describe().split(' ').next().unwrap_or("world"),
-            args.seed
-        ),
+        name: format!("mission-seed-{}", args.seed),
         world,
         map,
+        chart,
     })
 }
 
@@ -185,8 +134,8 @@ impl MissionWorld {
         &self.world
     }
 
-    /// The chart.
-    pub fn map(&self) -> &Map {
+    /// The chart and its water mask.
+    pub fn map(&self) -> &ScenarioMap {
         &self.map
     }
 
@@ -201,7 +150,7 @@ impl MissionWorld {
             "{} waypoints ({} dynamic) on {}, seed {}",
             self.world.n(),
             self.world.dynamic_nodes().len(),
-            self.map.describe(),
+            self.chart,
             self.world.seed()
         )
     }
