@@ -1,28 +1,61 @@
 //! `planner`: the command-line front of the planner library.
 //!
-//! (Interim wiring of the three-process subcommands until the CLI lands.)
+//! Contract: every subcommand lives in its own module under [`cli`] with an
+//! `Args` struct and a `run` function. Success exits 0. A failure prints one
+//! line `planner: error: <what is wrong>` to stderr and exits non-zero (2 for
+//! bad input or arguments, 1 when output cannot be written or the planner
+//! itself is at fault); clap reports its own usage errors (also exit 2).
+
+mod cli;
+
 use std::process::ExitCode;
 
-use clap::Parser;
+use clap::{Parser, Subcommand};
 
+/// Counts the service thread's calls into the system allocator and serves
+/// its small blocks from a start-up pool (`planner::service::alloc`): the
+/// proof that the re-planning loop is allocation-free in steady state.
 #[global_allocator]
 static ALLOC: planner::service::alloc::PoolAlloc = planner::service::alloc::PoolAlloc;
 
-#[derive(Parser)]
-#[command(name = "planner")]
+/// Real-time task-assign route planner for AUVs (PSO and BBO on a
+/// priority-vector encoding).
+#[derive(Parser, Debug)]
+#[command(name = "planner", version, about, long_about = None)]
 struct Cli {
     #[command(subcommand)]
-    cmd: planner::mission::cli::IpcCommand,
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Solve an `auv-route-instance/1` file and print its solution.
+    Solve(cli::solve::Args),
+    /// Write a scenario's current snapshot as instance JSON.
+    Export(cli::export::Args),
+    /// Convert classic orienteering benchmark files (Tsiligirides, Chao) into instance JSON.
+    ConvertOp(cli::convert_op::Args),
+    /// The three-process system: `mission`, `serve`, `bench-latency`.
+    #[command(flatten)]
+    Ipc(planner::mission::cli::IpcCommand),
 }
 
 fn main() -> ExitCode {
     planner::service::alloc::mark_installed();
-    let cli = match Cli::try_parse() {
-        Ok(c) => c,
-        Err(e) => {
-            let _ = e.print();
-            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
-        }
+    let parsed = Cli::parse();
+    let result = match parsed.command {
+        // These report their own errors in the same one-line form and keep
+        // their documented exit codes (130 when interrupted).
+        Command::Ipc(cmd) => return planner::mission::cli::run(&cmd),
+        Command::Solve(args) => cli::solve::run(args),
+        Command::Export(args) => cli::export::run(args),
+        Command::ConvertOp(args) => cli::convert_op::run(args),
     };
-    planner::mission::cli::run(&cli.cmd)
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            cli::report(&e);
+            ExitCode::from(e.exit_code())
+        }
+    }
 }

@@ -116,22 +116,44 @@ pub enum ProblemError {
     },
 }
 
-/// Dense per-pair tables, boxed because they are large (5 × 128 KiB).
-struct Tables {
+/// What the decoder needs about one directed step `a → b`, packed into one
+/// 32-byte record so a step touches one cache line instead of four tables.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct EdgeData {
     /// Edge time T_ab = d_ab / v + δ_ab, s; +∞ where there is no edge.
-    time_s: [[f64; MAX_NODES]; MAX_NODES],
+    pub time_s: f64,
     /// 3-D length d_ab, m.
-    distance_m: [[f64; MAX_NODES]; MAX_NODES],
+    pub distance_m: f64,
     /// Edge weight ρ/ξ plus the prize of the far node `b`.
-    gain: [[f64; MAX_NODES]; MAX_NODES],
+    pub gain: f64,
     /// ξ/ρ of the edge's task (0 when ρ = 0), for `paper_cost`.
-    risk_ratio: [[f64; MAX_NODES]; MAX_NODES],
-    /// Look-ahead: T_ab + shortest time from b to the goal; +∞ where there is
-    /// no edge or b is excluded. A decoder may step to b only if this fits in
-    /// the time left.
-    reach_s: [[f64; MAX_NODES]; MAX_NODES],
+    pub risk_ratio: f64,
 }
 
+impl EdgeData {
+    /// No edge.
+    const NONE: Self = Self {
+        time_s: f64::INFINITY,
+        distance_m: 0.0,
+        gain: 0.0,
+        risk_ratio: 0.0,
+    };
+}
+
+/// Dense per-pair tables, boxed because they are large (768 KiB).
+struct Tables {
+    /// Look-ahead: T_ab + shortest time from b to the goal; +∞ where there is
+    /// no edge or b is excluded (and in every column ≥ n, which the decoder's
+    /// padded scan relies on). A decoder may step to b only if this fits in
+    /// the time left. Scanned whole rows at a time, so kept apart.
+    reach_s: [[f64; MAX_NODES]; MAX_NODES],
+    /// Edge time T_ab, s; +∞ where there is no edge. Duplicates
+    /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row.
+    time_s: [[f64; MAX_NODES]; MAX_NODES],
+    /// Everything a step a → b adds to a route's figures.
+    edge: [[EdgeData; MAX_NODES]; MAX_NODES],
+}
 /// One routing problem, ready for the solvers.
 pub struct Problem {
     n: usize,
@@ -160,11 +182,9 @@ impl Problem {
                 let p = v.as_mut_ptr();
                 for row in 0..MAX_NODES {
                     for col in 0..MAX_NODES {
-                        (*p).time_s[row][col] = f64::INFINITY;
-                        (*p).distance_m[row][col] = 0.0;
-                        (*p).gain[row][col] = 0.0;
-                        (*p).risk_ratio[row][col] = 0.0;
                         (*p).reach_s[row][col] = f64::INFINITY;
+                        (*p).time_s[row][col] = f64::INFINITY;
+                        (*p).edge[row][col] = EdgeData::NONE;
                     }
                 }
                 v.set_len(1);
@@ -260,9 +280,7 @@ impl Problem {
         for row in 0..old_n {
             self.tables.time_s[row][..old_n].fill(f64::INFINITY);
             self.tables.reach_s[row][..old_n].fill(f64::INFINITY);
-            self.tables.distance_m[row][..old_n].fill(0.0);
-            self.tables.gain[row][..old_n].fill(0.0);
-            self.tables.risk_ratio[row][..old_n].fill(0.0);
+            self.tables.edge[row][..old_n].fill(EdgeData::NONE);
             self.adjacency[row] = NodeSet::EMPTY;
             self.prize[row] = 0.0;
         }
@@ -293,13 +311,15 @@ impl Problem {
         let t = &mut self.tables;
         for (u, v) in [(a, b), (b, a)] {
             t.time_s[u][v] = time_s;
-            t.distance_m[u][v] = distance_m;
-            t.risk_ratio[u][v] = ratio;
+            // Prizes are added to the gain in `finish`, once every prize is known.
+            t.edge[u][v] = EdgeData {
+                time_s,
+                distance_m,
+                gain: weight,
+                risk_ratio: ratio,
+            };
             self.adjacency[u].insert(v);
         }
-        // Prizes are added in `finish`, once every prize is known.
-        t.gain[a][b] = weight;
-        t.gain[b][a] = weight;
     }
 
     /// Completes a fill: adds prizes to the gain table and computes the
@@ -308,7 +328,7 @@ impl Problem {
         let n = self.n;
         for u in 0..n {
             for v in self.adjacency[u].iter() {
-                self.tables.gain[u][v] += self.prize[v];
+                self.tables.edge[u][v].gain += self.prize[v];
             }
         }
         self.shortest_times_to_goal();
@@ -408,17 +428,17 @@ impl Problem {
     /// Edge length, m.
     #[inline]
     pub fn distance_m(&self, a: usize, b: usize) -> f64 {
-        self.tables.distance_m[a][b]
+        self.tables.edge[a][b].distance_m
     }
     /// Weight gained by travelling a→b: the edge's ρ/ξ plus b's prize.
     #[inline]
     pub fn gain(&self, a: usize, b: usize) -> f64 {
-        self.tables.gain[a][b]
+        self.tables.edge[a][b].gain
     }
     /// ξ/ρ of the edge's task (0 when ρ = 0).
     #[inline]
     pub fn risk_ratio(&self, a: usize, b: usize) -> f64 {
-        self.tables.risk_ratio[a][b]
+        self.tables.edge[a][b].risk_ratio
     }
     /// Prize of node `i`.
     #[inline]
@@ -430,10 +450,21 @@ impl Problem {
     pub fn to_goal_s(&self, u: usize) -> f64 {
         self.to_goal_s[u]
     }
+    /// Shortest time from every node to the goal, s (first `n` entries
+    /// meaningful; the rest may be stale).
+    #[inline]
+    pub(crate) fn to_goal_row(&self) -> &[f64; MAX_NODES] {
+        &self.to_goal_s
+    }
     /// Row `u` of the look-ahead table (first `n` entries meaningful).
     #[inline]
     pub fn reach_row(&self, u: usize) -> &[f64; MAX_NODES] {
         &self.tables.reach_s[u]
+    }
+    /// Everything the step `a → b` adds to a route (one cache line).
+    #[inline]
+    pub(crate) fn edge(&self, a: usize, b: usize) -> &EdgeData {
+        &self.tables.edge[a][b]
     }
     /// Row `u` of the edge-time table.
     #[inline]

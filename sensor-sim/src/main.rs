@@ -154,11 +154,11 @@ fn main() -> ExitCode {
         Ok(Outcome::Aborted) => ExitCode::from(130),
         Ok(_) => ExitCode::SUCCESS,
         Err(e @ Error::BadPeriod(_)) => {
-            eprintln!("sensor-sim: {e}");
+            eprintln!("sensor-sim: error: {e}");
             ExitCode::from(2)
         }
         Err(e) => {
-            eprintln!("sensor-sim: {e}");
+            eprintln!("sensor-sim: error: {e}");
             ExitCode::from(1)
         }
     }

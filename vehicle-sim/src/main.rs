@@ -302,11 +302,11 @@ fn main() -> ExitCode {
         Ok(Outcome::Aborted) => ExitCode::from(130),
         Ok(_) => ExitCode::SUCCESS,
         Err(e @ Error::Usage(_)) => {
-            eprintln!("vehicle-sim: {e}");
+            eprintln!("vehicle-sim: error: {e}");
             ExitCode::from(2)
         }
         Err(e) => {
-            eprintln!("vehicle-sim: {e}");
+            eprintln!("vehicle-sim: error: {e}");
             ExitCode::from(1)
         }
     }

@@ -487,12 +487,12 @@ pub fn run_bench(a: &BenchArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e @ BenchError::Usage(_)) => {
-            eprintln!("planner: {e}");
+            eprintln!("planner: error: {e}");
             ExitCode::from(2)
         }
         Err(BenchError::Interrupted) => ExitCode::from(130),
         Err(e) => {
-            eprintln!("planner: bench-latency: {e}");
+            eprintln!("planner: error: bench-latency: {e}");
             ExitCode::from(1)
         }
     }
@@ -535,7 +535,7 @@ pub fn run_echo(a: &EchoArgs) -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(BenchError::Interrupted) => ExitCode::from(130),
         Err(e) => {
-            eprintln!("planner: bench-echo: {e}");
+            eprintln!("planner: error: bench-echo: {e}");
             ExitCode::from(1)
         }
     }

@@ -591,11 +591,11 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
             }
         }
         Err(e @ MissionError::Usage(_)) => {
-            eprintln!("planner: {e}");
+            eprintln!("planner: error: {e}");
             ExitCode::from(2)
         }
         Err(e) => {
-            eprintln!("planner: mission: {e}");
+            eprintln!("planner: error: mission: {e}");
             ExitCode::from(1)
         }
     }

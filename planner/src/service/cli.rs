@@ -7,10 +7,10 @@ use std::time::Duration;
 use super::alloc;
 use super::core::{PlannerCore, ServiceConfig, ServiceEvent};
 use super::run::{ExitReason, PlannerPorts, run_service};
-use super::standin::RandomKeySearch;
 use crate::mission::world::{ScenarioArgs, WorldError, load_world};
 use crate::msg::{Plan, PlannerStatus, VehicleState, WaypointSnapshot};
 use crate::solver::Solver;
+use crate::solver::pso::{Pso, PsoSettings};
 use crate::transport::guard::Guarded;
 use crate::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use crate::transport::{IpcArgs, Role, SetupError, TransportError, signal};
@@ -99,10 +99,10 @@ impl ServiceArgs {
     }
 }
 
-/// The solver the service runs. The paper's PSO (150 particles × 150
-/// iterations) replaces the stand-in once it is implemented.
+/// The solver the service runs: the paper's PSO (150 particles; the
+/// iteration budget comes from the service configuration, default 150).
 pub fn make_solver() -> Box<dyn Solver> {
-    Box::new(RandomKeySearch::new(150))
+    Box::new(Pso::new(PsoSettings::paper()))
 }
 
 /// The planner's ports on shared memory.
@@ -188,11 +188,11 @@ pub fn run_serve(args: &ServeArgs) -> ExitCode {
         Ok(ExitReason::Shutdown) => ExitCode::from(130),
         Ok(_) => ExitCode::SUCCESS,
         Err(e @ ServeError::Usage(_)) => {
-            eprintln!("planner: {e}");
+            eprintln!("planner: error: {e}");
             ExitCode::from(2)
         }
         Err(e) => {
-            eprintln!("planner: {e}");
+            eprintln!("planner: error: {e}");
             ExitCode::from(1)
         }
     }

@@ -9,10 +9,14 @@
 //! stopped (house style §1). Solvers know nothing of transport or files.
 
 pub mod bbo;
+mod lanes;
 pub mod local;
 pub mod pso;
 
 use std::time::{Duration, Instant};
+
+use bbo::{Bbo, BboSettings};
+use pso::{Pso, PsoSettings};
 
 use crate::problem::Problem;
 use crate::rng::PlannerRng;
@@ -88,6 +92,103 @@ pub trait Solver {
     fn best(&self) -> (&Route, &RouteEval);
 }
 
+/// A boxed solver is a solver (so `Algorithm::build`'s boxes go wherever a
+/// `S: Solver` does, e.g. the generic conformance suite).
+impl<S: Solver + ?Sized> Solver for Box<S> {
+    fn name(&self) -> &'static str {
+        (**self).name()
+    }
+    fn start(&mut self, problem: &Problem, rng: &mut PlannerRng, warm: Option<&Route>) {
+        (**self).start(problem, rng, warm)
+    }
+    fn step(&mut self, problem: &Problem, rng: &mut PlannerRng) -> bool {
+        (**self).step(problem, rng)
+    }
+    fn best(&self) -> (&Route, &RouteEval) {
+        (**self).best()
+    }
+}
+
+/// Figures every real route beats under [`Problem::better`] (infeasible
+/// with infinite time), the best-so-far before the first decode.
+pub(crate) const WORST: RouteEval = RouteEval {
+    time_s: f64::INFINITY,
+    distance_m: 0.0,
+    weight: 0.0,
+    risk_ratio_sum: 0.0,
+    tasks: 0,
+    feasible: false,
+};
+
+/// The solvers the command line can pick by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Algorithm {
+    /// [`Pso`] with the paper's settings.
+    Pso,
+    /// [`Bbo`] with the paper's settings.
+    Bbo,
+}
+
+/// A name that is not an [`Algorithm`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown algorithm `{0}` (expected one of: pso, bbo)")]
+pub struct UnknownAlgorithm(pub String);
+
+impl Algorithm {
+    /// Every algorithm, in a fixed order (reports, Monte Carlo columns).
+    pub const ALL: [Self; 2] = [Self::Pso, Self::Bbo];
+
+    /// The name used on the command line and in reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Pso => "pso",
+            Self::Bbo => "bbo",
+        }
+    }
+
+    /// Iterations of the paper's full budget: 150 PSO iterations (paper),
+    /// 150 BBO generations (our choice, the paper is silent).
+    pub fn paper_iterations(self) -> u32 {
+        match self {
+            Self::Pso => PsoSettings::paper().iterations,
+            Self::Bbo => BboSettings::paper().generations,
+        }
+    }
+
+    /// A solver with the paper's settings and a budget of `iterations`
+    /// (which also sets the PSO's inertia schedule). Allocates every buffer
+    /// now; drive it with [`run`] and `Budget::iterations(iterations)`.
+    pub fn build(self, iterations: u32) -> Box<dyn Solver + Send> {
+        match self {
+            Self::Pso => Box::new(Pso::new(PsoSettings {
+                iterations,
+                ..PsoSettings::paper()
+            })),
+            Self::Bbo => Box::new(Bbo::new(BboSettings {
+                generations: iterations,
+                ..BboSettings::paper()
+            })),
+        }
+    }
+}
+
+impl core::fmt::Display for Algorithm {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl core::str::FromStr for Algorithm {
+    type Err = UnknownAlgorithm;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::ALL
+            .into_iter()
+            .find(|a| a.as_str() == s)
+            .ok_or_else(|| UnknownAlgorithm(s.to_owned()))
+    }
+}
+
 /// Runs `solver` on `problem` within `budget`.
 pub fn run<S: Solver + ?Sized>(
     solver: &mut S,
@@ -115,5 +216,21 @@ pub fn run<S: Solver + ?Sized>(
         iterations,
         stop,
         elapsed: t0.elapsed(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn algorithms_round_trip_their_names() {
+        for a in Algorithm::ALL {
+            assert_eq!(a.as_str().parse::<Algorithm>(), Ok(a));
+            assert_eq!(a.build(7).name(), a.as_str());
+            assert_eq!(a.paper_iterations(), 150);
+        }
+        let err = "PSO".parse::<Algorithm>().unwrap_err();
+        assert_eq!(err.to_string(), "unknown algorithm `PSO` (expected one of: pso, bbo)");
     }
 }

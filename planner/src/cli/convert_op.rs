@@ -1,0 +1,129 @@
+//! `planner convert-op`: convert classic orienteering benchmark files
+//! (`shared/benchmarks/op/`) into `auv-route-instance/1` JSON.
+//!
+//! Contract: a single file is written to `--out` (or into `--out` when that
+//! is an existing folder); a folder is searched recursively for `.txt`
+//! files, each written as `<name>.json` at the same relative place under
+//! `--out`. The instance is named after the file (without `.txt`). Files are
+//! processed in sorted order and the first malformed one stops the run with
+//! its path, line and column.
+
+use std::path::{Path, PathBuf};
+
+use planner::oplib::parse_op;
+
+use super::{CliError, print, read_text, write_text};
+
+/// Arguments of `planner convert-op`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A benchmark file, or a folder searched recursively for `.txt` files.
+    #[arg(value_name = "FILE|DIR")]
+    pub input: PathBuf,
+    /// Output JSON file (or an existing folder) for one input file; output
+    /// folder (created if missing) for an input folder.
+    #[arg(long, value_name = "FILE|DIR")]
+    pub out: PathBuf,
+}
+
+/// Runs `planner convert-op`.
+pub fn run(args: Args) -> Result<(), CliError> {
+    let meta = std::fs::metadata(&args.input).map_err(|source| CliError::Read {
+        path: args.input.clone(),
+        source,
+    })?;
+    if meta.is_dir() {
+        convert_tree(&args.input, &args.out)
+    } else {
+        let out = if args.out.is_dir() {
+            args.out.join(json_name(&args.input))
+        } else {
+            args.out.clone()
+        };
+        let summary = convert_file(&args.input, &out)?;
+        print(&format!("wrote {} ({summary})\n", out.display()))
+    }
+}
+
+/// `<stem>.json` for a benchmark file.
+fn json_name(file: &Path) -> PathBuf {
+    PathBuf::from(stem(file)).with_extension("json")
+}
+
+fn stem(file: &Path) -> String {
+    file.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// Converts one file; returns a short description of what was written.
+fn convert_file(input: &Path, out: &Path) -> Result<String, CliError> {
+    let text = read_text(input)?;
+    let op = parse_op(&text).map_err(|source| CliError::Op {
+        path: input.to_path_buf(),
+        source,
+    })?;
+    let inst = op.to_instance(&stem(input));
+    write_text(out, &(inst.to_json() + "\n"))?;
+    Ok(format!("{} nodes, Tmax {}", inst.nodes.len(), op.tmax))
+}
+
+fn convert_tree(root: &Path, out_root: &Path) -> Result<(), CliError> {
+    if out_root.exists() && !out_root.is_dir() {
+        return Err(CliError::Usage(format!(
+            "--out {} is a file, but the input {} is a folder: give a folder",
+            out_root.display(),
+            root.display()
+        )));
+    }
+    let mut files = Vec::new();
+    collect_txt(root, &mut files)?;
+    if files.is_empty() {
+        return Err(CliError::Usage(format!(
+            "no .txt benchmark files under {}",
+            root.display()
+        )));
+    }
+    for file in &files {
+        // `file` was found under `root`, so the prefix is there.
+        let rel = file.strip_prefix(root).unwrap_or(file);
+        let out = out_root.join(rel).with_extension("json");
+        if let Some(dir) = out.parent() {
+            std::fs::create_dir_all(dir).map_err(|source| CliError::Write {
+                path: dir.to_path_buf(),
+                source,
+            })?;
+        }
+        convert_file(file, &out)?;
+    }
+    print(&format!(
+        "converted {} files from {} into {}\n",
+        files.len(),
+        root.display(),
+        out_root.display()
+    ))
+}
+
+/// Every `.txt` file under `dir`, sorted, so runs are reproducible.
+fn collect_txt(dir: &Path, files: &mut Vec<PathBuf>) -> Result<(), CliError> {
+    let read_err = |source| CliError::Read {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut entries = std::fs::read_dir(dir)
+        .map_err(read_err)?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(read_err)?;
+    entries.sort();
+    for path in entries {
+        // Symlinked folders are not followed (no cycles); symlinked files are read.
+        let is_dir = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir());
+        if is_dir {
+            collect_txt(&path, files)?;
+        } else if path.extension().is_some_and(|e| e == "txt") && path.is_file() {
+            files.push(path);
+        }
+    }
+    Ok(())
+}

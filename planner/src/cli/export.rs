@@ -1,0 +1,80 @@
+//! `planner export`: write the current snapshot of a scenario as an
+//! `auv-route-instance/1` file, so it can be re-solved here or elsewhere.
+//!
+//! Contract: the scenario is the default one ([`ScenarioConfig::default`],
+//! the embedded Benoit's Cove chart) or the `auv-scenario/1` file given with
+//! `--scenario`; together with `--seed` it fixes the world bit for bit
+//! ([`planner::scenario::load_world`]). The snapshot is the world as
+//! generated (time 0), named `<chart>-seed-<S>-t0`. The file written reads
+//! back through [`Instance::from_json`] to the same instance (checked before
+//! it is written).
+
+use std::path::{Path, PathBuf};
+
+use planner::instance::Instance;
+use planner::scenario::{ChartSource, EMBEDDED_CHART_NAME, ScenarioConfig, load_world};
+
+use super::{CliError, check_json, print, read_text, write_text};
+
+/// Arguments of `planner export`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scenario seed: with the scenario it fixes the waypoints, tasks and edges.
+    #[arg(long, allow_negative_numbers = true)]
+    pub seed: u64,
+    /// Scenario file (`auv-scenario/1` JSON; absent fields take their
+    /// defaults) [default: the built-in scenario on the embedded chart].
+    #[arg(long, value_name = "FILE")]
+    pub scenario: Option<PathBuf>,
+    /// Where to write the instance JSON.
+    #[arg(long, value_name = "FILE.json")]
+    pub out: PathBuf,
+}
+
+/// Reads and validates a scenario file.
+pub fn load_scenario(path: &Path) -> Result<ScenarioConfig, CliError> {
+    // Read and syntax-check here first so a missing file and a NaN get the
+    // same wording as for instance files.
+    let text = read_text(path)?;
+    check_json(path, &text)?;
+    ScenarioConfig::from_file(path).map_err(|source| CliError::ScenarioConfig {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The snapshot name: `<chart>-seed-<S>-t0`.
+pub fn snapshot_name(config: &ScenarioConfig, seed: u64) -> String {
+    let chart = match &config.chart {
+        ChartSource::Embedded(name) => name.clone(),
+        ChartSource::Png { path, .. } => path
+            .file_stem()
+            .map_or_else(|| EMBEDDED_CHART_NAME.to_string(), |s| s.to_string_lossy().into_owned()),
+    };
+    format!("{chart}-seed-{seed}-t0")
+}
+
+/// Runs `planner export`.
+pub fn run(args: Args) -> Result<(), CliError> {
+    let (config, origin) = match &args.scenario {
+        Some(path) => (load_scenario(path)?, path.display().to_string()),
+        None => (ScenarioConfig::default(), "default scenario".to_string()),
+    };
+    let (world, _map) = load_world(&config, args.seed).map_err(|source| CliError::World { origin, source })?;
+    let inst = world.snapshot(&snapshot_name(&config, args.seed));
+    let text = inst.to_json();
+    match Instance::from_json(&text) {
+        Ok(back) if back == inst => {}
+        Ok(_) => return Err(CliError::Internal("the snapshot does not read back identically".into())),
+        Err(e) => return Err(CliError::Internal(format!("the snapshot does not read back: {e}"))),
+    }
+    write_text(&args.out, &(text + "\n"))?;
+    print(&format!(
+        "wrote {} ({}: {} nodes, {} edges, scenario fingerprint {:016x})\n",
+        args.out.display(),
+        inst.name,
+        inst.nodes.len(),
+        inst.edges.len(),
+        world.fingerprint()
+    ))
+}

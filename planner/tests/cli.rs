@@ -1,0 +1,775 @@
+//! End-to-end tests of the `planner` binary: `solve` output checked against
+//! an independent recomputation from the instance, classic orienteering
+//! instances converted and solved within their known optima, scenario
+//! snapshots exported and re-solved, determinism, and one test per kind of
+//! bad input (non-zero exit, one clear line, no panic).
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use planner::fixtures::random_instance;
+use planner::instance::{Instance, Objective};
+use planner::oplib::BestKnown;
+use planner::solution::Solution;
+use serde_json::{Value, json};
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data");
+
+fn planner(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_planner"))
+        .args(args)
+        .output()
+        .expect("the planner binary runs")
+}
+
+/// A fresh, empty scratch folder for one test.
+fn scratch(test: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("planner-cli").join(test);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn path_str(p: &Path) -> &str {
+    p.to_str().expect("scratch paths are UTF-8")
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn assert_ok(out: &Output) {
+    assert!(out.status.success(), "exit {:?}, stderr: {}", out.status, stderr(out));
+}
+
+/// Our own errors: exit 2, exactly one line `planner: error: …` naming
+/// every `needle`, nothing on stdout, no panic.
+fn assert_input_error(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "panic: {err}");
+    assert!(err.starts_with("planner: error: "), "{err}");
+    assert_eq!(err.lines().count(), 1, "one line expected: {err}");
+    for needle in needles {
+        assert!(err.contains(needle), "{err:?} should mention {needle:?}");
+    }
+    assert!(out.stdout.is_empty(), "stdout: {}", stdout(out));
+}
+
+/// clap's usage errors: exit 2, no panic, the message names the problem.
+fn assert_usage_error(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "panic: {err}");
+    for needle in needles {
+        assert!(err.contains(needle), "{err:?} should mention {needle:?}");
+    }
+}
+
+/// A paper-like network: 30 waypoints, tasks on edges, 31 000 s budget.
+fn paper_like(seed: u64) -> Instance {
+    random_instance(30, 0.35, 31_000.0, seed)
+}
+
+fn write_json(dir: &Path, name: &str, v: &Value) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, v.to_string()).unwrap();
+    p
+}
+
+fn write_instance(dir: &Path, name: &str, inst: &Instance) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, inst.to_json()).unwrap();
+    p
+}
+
+fn solve_json(instance: &Path, extra: &[&str]) -> (Value, String) {
+    let mut args = vec!["solve", "--instance", path_str(instance), "--json"];
+    args.extend_from_slice(extra);
+    let out = planner(&args);
+    assert_ok(&out);
+    let text = stdout(&out);
+    let v: Value = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}: {text}"));
+    (v, text)
+}
+
+/// The format's derived figures, computed here from the instance document
+/// alone, as an outside checker would (deliberately not the library's code).
+struct Checked {
+    weight: f64,
+    time_s: f64,
+    distance_m: f64,
+    cost: f64,
+    tasks: u64,
+    feasible: bool,
+}
+
+fn recompute(doc: &Value, route: &[usize]) -> Checked {
+    let num = |v: &Value| v.as_f64().unwrap();
+    let mut nodes = HashMap::new();
+    for n in doc["nodes"].as_array().unwrap() {
+        let id = n["id"].as_u64().unwrap() as usize;
+        nodes.insert(id, [num(&n["x"]), num(&n["y"]), num(&n["z"]), num(&n["prize"])]);
+    }
+    let mut edges = HashMap::new();
+    for e in doc["edges"].as_array().unwrap() {
+        let (a, b) = (e["a"].as_u64().unwrap() as usize, e["b"].as_u64().unwrap() as usize);
+        let task = [num(&e["priority"]), num(&e["risk"]), num(&e["task_time_s"])];
+        edges.insert((a.min(b), a.max(b)), task);
+    }
+    let speed = num(&doc["speed_mps"]);
+    let budget = num(&doc["time_available_s"]);
+    assert_eq!(route.first().copied(), doc["start"].as_u64().map(|v| v as usize));
+    assert_eq!(route.last().copied(), doc["goal"].as_u64().map(|v| v as usize));
+    let mut distinct = route.to_vec();
+    distinct.sort_unstable();
+    distinct.dedup();
+    assert_eq!(distinct.len(), route.len(), "route repeats a node: {route:?}");
+    let mut c = Checked {
+        weight: route.iter().map(|id| nodes[id][3]).sum(),
+        time_s: 0.0,
+        distance_m: 0.0,
+        cost: 0.0,
+        tasks: 0,
+        feasible: false,
+    };
+    let mut ratio = 0.0;
+    for w in route.windows(2) {
+        let [p, r, t] = edges
+            .get(&(w[0].min(w[1]), w[0].max(w[1])))
+            .unwrap_or_else(|| panic!("{}-{} is not an edge", w[0], w[1]));
+        let (u, v) = (nodes[&w[0]], nodes[&w[1]]);
+        let d = ((u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2) + (u[2] - v[2]).powi(2)).sqrt();
+        c.distance_m += d;
+        c.time_s += d / speed + t;
+        c.weight += p / r;
+        if *p > 0.0 {
+            ratio += r / p;
+        }
+        c.tasks += 1;
+    }
+    c.feasible = c.time_s <= budget * (1.0 + 1e-6);
+    if doc["objective"]["kind"] == "paper_cost" {
+        c.cost = num(&doc["objective"]["phi1"]) * (c.time_s - budget).abs() + num(&doc["objective"]["phi2"]) * ratio;
+    }
+    c
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
+}
+
+fn route_of(v: &Value) -> Vec<usize> {
+    v["route"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap() as usize)
+        .collect()
+}
+
+fn assert_figures_match(doc: &Value, sol: &Value) {
+    let route = route_of(sol);
+    let c = recompute(doc, &route);
+    for (field, expected) in [
+        ("weight", c.weight),
+        ("time_s", c.time_s),
+        ("distance_m", c.distance_m),
+        ("cost", c.cost),
+    ] {
+        let got = sol[field].as_f64().unwrap();
+        assert!(close(got, expected), "{field}: reported {got}, recomputed {expected}");
+    }
+    assert_eq!(sol["tasks"].as_u64(), Some(c.tasks));
+    assert_eq!(sol["feasible"].as_bool(), Some(c.feasible));
+}
+
+#[test]
+#[ignore = "TEMPORARY: needs PSO/BBO from main"]
+fn solve_json_figures_equal_the_recomputation_from_the_instance() {
+    let dir = scratch("figures");
+    for (k, objective) in [Objective::MaxWeight, Objective::PaperCost { phi1: 0.01, phi2: 2.0 }]
+        .into_iter()
+        .enumerate()
+    {
+        let mut inst = paper_like(11 + k as u64);
+        inst.objective = objective;
+        let path = write_instance(&dir, &format!("paper-{k}.json"), &inst);
+        let doc: Value = serde_json::from_str(&inst.to_json()).unwrap();
+        for algorithm in ["pso", "bbo"] {
+            let (sol, text) = solve_json(&path, &["--algorithm", algorithm, "--iterations", "20"]);
+            for key in [
+                "route",
+                "feasible",
+                "weight",
+                "time_s",
+                "distance_m",
+                "cost",
+                "tasks",
+                "solve_ms",
+                "iterations",
+                "algorithm",
+                "seed",
+                "stop",
+                "objective",
+            ] {
+                assert!(sol.get(key).is_some(), "{key} missing: {text}");
+            }
+            assert_eq!(sol["algorithm"], algorithm);
+            assert_eq!(sol["seed"], 1, "the documented default seed is reported");
+            assert!(sol["iterations"].as_u64().unwrap() <= 20);
+            assert!(["budget", "converged"].contains(&sol["stop"].as_str().unwrap()));
+            assert_eq!(sol["objective"], if k == 0 { "max_weight" } else { "paper_cost" });
+            assert!(sol["solve_ms"].as_f64().unwrap() >= 0.0);
+            assert_figures_match(&doc, &sol);
+            // And bit-for-bit against the library's checker.
+            Solution::from_json(&text).unwrap().verify(&inst).unwrap();
+        }
+    }
+}
+
+#[test]
+fn instances_round_trip_through_json_bit_for_bit() {
+    // What `solve` reads must be exactly what `export` wrote, or the
+    // recomputed figures drift by an ulp from an outside checker's.
+    for seed in 0..20 {
+        let inst = paper_like(seed);
+        assert_eq!(Instance::from_json(&inst.to_json()).unwrap(), inst, "seed {seed}");
+    }
+}
+
+#[test]
+#[ignore = "TEMPORARY: needs PSO/BBO from main"]
+fn solve_without_json_prints_a_readable_summary() {
+    let dir = scratch("summary");
+    let path = write_instance(&dir, "paper.json", &paper_like(5));
+    let out = planner(&[
+        "solve",
+        "--instance",
+        path_str(&path),
+        "--iterations",
+        "5",
+        "--seed",
+        "9",
+    ]);
+    assert_ok(&out);
+    let text = stdout(&out);
+    for needle in ["route      0 -> ", "feasible   ", "weight     ", "seed 9", "pso"] {
+        assert!(text.contains(needle), "{needle:?} missing from:\n{text}");
+    }
+}
+
+#[test]
+#[ignore = "TEMPORARY: needs PSO/BBO from main"]
+fn same_seed_gives_identical_json_except_solve_ms() {
+    let dir = scratch("determinism");
+    let path = write_instance(&dir, "paper.json", &paper_like(21));
+    for algorithm in ["pso", "bbo"] {
+        let args = ["--algorithm", algorithm, "--seed", "12345", "--iterations", "30"];
+        let strip = |text: String| -> String {
+            text.lines()
+                .filter(|l| !l.trim_start().starts_with("\"solve_ms\""))
+                .collect::<Vec<_>>()
+                .join("\n")
+        };
+        let (_, a) = solve_json(&path, &args);
+        let (_, b) = solve_json(&path, &args);
+        assert_eq!(strip(a.clone()), strip(b), "{algorithm}");
+        assert!(a.contains("\"seed\": 12345"), "{a}");
+    }
+}
+
+fn best_known() -> BestKnown {
+    BestKnown::parse(&std::fs::read_to_string(format!("{DATA}/op/best_known.csv")).unwrap()).unwrap()
+}
+
+#[test]
+#[ignore = "TEMPORARY: needs PSO/BBO from main"]
+fn classic_instances_convert_and_solve_within_the_known_optimum() {
+    let dir = scratch("classic");
+    let best = best_known();
+    for tmax in ["05", "10"] {
+        let name = format!("tsiligirides_problem_1_budget_{tmax}");
+        let src = format!("{DATA}/op/tsiligirides_set1/{name}.txt");
+        let json = dir.join(format!("{name}.json"));
+        assert_ok(&planner(&["convert-op", &src, "--out", path_str(&json)]));
+        let doc: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let optimum = best.get(&name).unwrap().score;
+        for algorithm in ["pso", "bbo"] {
+            let (sol, _) = solve_json(&json, &["--algorithm", algorithm]);
+            assert_eq!(sol["feasible"], true, "{name} {algorithm}: {sol}");
+            let weight = sol["weight"].as_f64().unwrap();
+            assert!(
+                weight <= optimum,
+                "{name} {algorithm}: {weight} beats the proven optimum {optimum}"
+            );
+            assert!(sol["time_s"].as_f64().unwrap() <= doc["time_available_s"].as_f64().unwrap() * (1.0 + 1e-6));
+            // Node prizes only: the weight is the score of the visited nodes.
+            assert_figures_match(&doc, &sol);
+        }
+    }
+}
+
+#[test]
+fn convert_op_maps_a_file_onto_the_format() {
+    let dir = scratch("convert-file");
+    let src = format!("{DATA}/op/tsiligirides_set1/tsiligirides_problem_1_budget_10.txt");
+    // An existing folder as --out receives <name>.json.
+    let out = planner(&["convert-op", &src, "--out", path_str(&dir)]);
+    assert_ok(&out);
+    let written = dir.join("tsiligirides_problem_1_budget_10.json");
+    assert!(stdout(&out).contains("32 nodes, Tmax 10"), "{}", stdout(&out));
+    let text = std::fs::read_to_string(&written).unwrap();
+    let inst = Instance::from_json(&text).unwrap();
+    assert_eq!(inst.name, "tsiligirides_problem_1_budget_10");
+    assert_eq!((inst.start, inst.goal), (0, 1));
+    assert_eq!((inst.speed_mps, inst.time_available_s), (1.0, 10.0));
+    assert_eq!(inst.objective, Objective::MaxWeight);
+    assert_eq!(inst.nodes.len(), 32);
+    assert_eq!(inst.edges.len(), 32 * 31 / 2);
+    assert!(
+        inst.edges
+            .iter()
+            .all(|e| e.priority == 0.0 && e.risk == 1.0 && e.task_time_s == 0.0)
+    );
+    // The file's first and third node lines: "10.5 14.4 0" and "18 15.9 10".
+    assert_eq!(
+        (inst.nodes[0].x, inst.nodes[0].y, inst.nodes[0].prize),
+        (10.5, 14.4, 0.0)
+    );
+    assert_eq!(
+        (inst.nodes[2].x, inst.nodes[2].y, inst.nodes[2].prize),
+        (18.0, 15.9, 10.0)
+    );
+    assert!(inst.nodes.iter().all(|n| n.z == 0.0));
+    let total: f64 = inst.nodes.iter().map(|n| n.prize).sum();
+    assert!(total > 0.0);
+}
+
+#[test]
+fn convert_op_converts_a_folder_tree() {
+    let dir = scratch("convert-tree");
+    let out_dir = dir.join("out");
+    let out = planner(&["convert-op", &format!("{DATA}/op"), "--out", path_str(&out_dir)]);
+    assert_ok(&out);
+    assert!(stdout(&out).contains("converted 2 files"), "{}", stdout(&out));
+    for tmax in ["05", "10"] {
+        let p = out_dir.join(format!("tsiligirides_set1/tsiligirides_problem_1_budget_{tmax}.json"));
+        let inst = Instance::from_json(&std::fs::read_to_string(&p).unwrap()).unwrap();
+        assert_eq!(inst.time_available_s, tmax.parse::<f64>().unwrap());
+    }
+    // README.md and best_known.csv are not benchmark files.
+    assert!(!out_dir.join("README.json").exists());
+    assert!(!out_dir.join("best_known.json").exists());
+}
+
+fn export(test: &str, extra: &[&str]) -> (PathBuf, Output) {
+    let dir = scratch(test);
+    let out_path = dir.join("snapshot.json");
+    let mut args = vec!["export", "--out", path_str(&out_path)];
+    args.extend_from_slice(extra);
+    let out = planner(&args);
+    (out_path, out)
+}
+
+#[test]
+fn export_writes_the_default_scenario_snapshot_deterministically() {
+    let (a, out) = export("export-a", &["--seed", "42"]);
+    assert_ok(&out);
+    assert!(stdout(&out).contains("benoits-cove-seed-42-t0"), "{}", stdout(&out));
+    let text = std::fs::read_to_string(&a).unwrap();
+    let inst = Instance::from_json(&text).unwrap();
+    assert_eq!(inst.name, "benoits-cove-seed-42-t0");
+    // The documented scenario defaults (planner::scenario module table).
+    assert_eq!(inst.nodes.len(), 40);
+    assert_eq!((inst.start, inst.goal), (0, 39));
+    assert_eq!((inst.speed_mps, inst.time_available_s), (1.5, 31_000.0));
+    assert_eq!(inst.objective, Objective::MaxWeight);
+    assert!(!inst.edges.is_empty());
+    for n in &inst.nodes {
+        assert!((0.0..=5000.0).contains(&n.x) && (0.0..=10_000.0).contains(&n.y) && (0.0..=1000.0).contains(&n.z));
+        assert_eq!(n.prize, 0.0);
+    }
+    for e in &inst.edges {
+        assert!((1.0..=10.0).contains(&e.priority) && (0.1..=1.0).contains(&e.risk));
+        assert!((120.0..=900.0).contains(&e.task_time_s));
+    }
+    let (b, out) = export("export-b", &["--seed", "42"]);
+    assert_ok(&out);
+    assert_eq!(std::fs::read(&b).unwrap(), text.as_bytes(), "same seed, same bytes");
+    let (c, out) = export("export-c", &["--seed", "43"]);
+    assert_ok(&out);
+    assert_ne!(
+        std::fs::read(&c).unwrap(),
+        text.as_bytes(),
+        "another seed, another network"
+    );
+}
+
+#[test]
+fn export_follows_a_scenario_file() {
+    let dir = scratch("export-scenario");
+    let scenario = write_json(
+        &dir,
+        "small.json",
+        &json!({"format": "auv-scenario/1", "nodes": 12, "dynamic": 3, "time_available_s": 9000,
+                "objective": {"kind": "paper_cost", "phi1": 0.01, "phi2": 1.0}}),
+    );
+    let out_path = dir.join("snap.json");
+    let out = planner(&[
+        "export",
+        "--seed",
+        "7",
+        "--scenario",
+        path_str(&scenario),
+        "--out",
+        path_str(&out_path),
+    ]);
+    assert_ok(&out);
+    let inst = Instance::from_json(&std::fs::read_to_string(&out_path).unwrap()).unwrap();
+    assert_eq!(inst.nodes.len(), 12);
+    assert_eq!(inst.goal, 11);
+    assert_eq!(inst.time_available_s, 9000.0);
+    assert_eq!(inst.objective, Objective::PaperCost { phi1: 0.01, phi2: 1.0 });
+}
+
+#[test]
+#[ignore = "TEMPORARY: needs PSO/BBO from main"]
+fn an_exported_snapshot_solves_with_checkable_figures() {
+    let (path, out) = export("export-solve", &["--seed", "5"]);
+    assert_ok(&out);
+    let doc: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    for algorithm in ["pso", "bbo"] {
+        let (sol, _) = solve_json(&path, &["--algorithm", algorithm, "--iterations", "30"]);
+        assert_eq!(sol["feasible"], true, "{algorithm}: {sol}");
+        assert!(sol["weight"].as_f64().unwrap() > 0.0);
+        assert_figures_match(&doc, &sol);
+    }
+}
+
+// ---- bad input: one test each -------------------------------------------
+
+/// A small valid instance document to break in one place per test.
+fn base_doc() -> Value {
+    serde_json::from_str(&paper_like(3).to_json()).unwrap()
+}
+
+fn solve_doc(test: &str, doc: &Value) -> Output {
+    let dir = scratch(test);
+    let path = write_json(&dir, "bad.json", doc);
+    planner(&["solve", "--instance", path_str(&path)])
+}
+
+fn solve_text(test: &str, text: &str) -> Output {
+    let dir = scratch(test);
+    let path = dir.join("bad.json");
+    std::fs::write(&path, text).unwrap();
+    planner(&["solve", "--instance", path_str(&path)])
+}
+
+#[test]
+fn bad_input_missing_file() {
+    let out = planner(&["solve", "--instance", "/nonexistent/instance.json"]);
+    assert_input_error(&out, &["cannot read /nonexistent/instance.json", "No such file"]);
+}
+
+#[test]
+fn bad_input_not_json() {
+    let out = solve_text("not-json", "this is not json\n");
+    assert_input_error(&out, &["bad.json", "not valid JSON", "line 1"]);
+    let out = solve_text("truncated-json", &base_doc().to_string()[..200]);
+    assert_input_error(&out, &["not valid JSON", "EOF"]);
+}
+
+#[test]
+fn bad_input_wrong_format_tag() {
+    let mut doc = base_doc();
+    doc["format"] = json!("auv-route-instance/2");
+    assert_input_error(
+        &solve_doc("format-tag", &doc),
+        &["unsupported format", "auv-route-instance/2", "auv-route-instance/1"],
+    );
+}
+
+#[test]
+fn bad_input_missing_field() {
+    let mut doc = base_doc();
+    doc.as_object_mut().unwrap().remove("time_available_s");
+    assert_input_error(&solve_doc("missing-field", &doc), &["missing field `time_available_s`"]);
+    let mut doc = base_doc();
+    doc["edges"][2].as_object_mut().unwrap().remove("risk");
+    assert_input_error(&solve_doc("missing-edge-field", &doc), &["missing field `risk`"]);
+}
+
+#[test]
+fn bad_input_nan_number() {
+    let text = base_doc()
+        .to_string()
+        .replacen("\"speed_mps\":1.5", "\"speed_mps\":NaN", 1);
+    assert!(text.contains("NaN"), "the fixture's speed is 1.5");
+    assert_input_error(
+        &solve_text("nan", &text),
+        &["NaN is not a JSON number", "line 1, column"],
+    );
+}
+
+#[test]
+fn bad_input_negative_numbers() {
+    let cases = [
+        ("speed_mps", json!(-1.5), "speed_mps = -1.5 is invalid: must be > 0"),
+        ("time_available_s", json!(-10.0), "time_available_s = -10 is invalid"),
+    ];
+    for (field, value, needle) in cases {
+        let mut doc = base_doc();
+        doc[field] = value;
+        assert_input_error(&solve_doc("negative", &doc), &[needle]);
+    }
+    let mut doc = base_doc();
+    doc["edges"][4]["task_time_s"] = json!(-1.0);
+    assert_input_error(
+        &solve_doc("negative-task", &doc),
+        &["edges[4].task_time_s = -1 is invalid"],
+    );
+    let mut doc = base_doc();
+    doc["nodes"][2]["prize"] = json!(-5.0);
+    assert_input_error(&solve_doc("negative-prize", &doc), &["nodes[2].prize = -5 is invalid"]);
+}
+
+#[test]
+fn bad_input_unknown_node_id() {
+    let mut doc = base_doc();
+    doc["edges"][0]["b"] = json!(99);
+    assert_input_error(
+        &solve_doc("unknown-node", &doc),
+        &["edges[0].b refers to unknown node id 99"],
+    );
+    let mut doc = base_doc();
+    doc["goal"] = json!(30);
+    assert_input_error(&solve_doc("unknown-goal", &doc), &["goal refers to unknown node id 30"]);
+}
+
+#[test]
+fn bad_input_duplicate_edge() {
+    let mut doc = base_doc();
+    let mut twin = doc["edges"][0].clone();
+    let (a, b) = (twin["a"].clone(), twin["b"].clone());
+    twin["a"] = b;
+    twin["b"] = a;
+    doc["edges"].as_array_mut().unwrap().push(twin);
+    assert_input_error(&solve_doc("duplicate-edge", &doc), &["duplicates edges[0]"]);
+}
+
+#[test]
+fn bad_input_start_equals_goal() {
+    let mut doc = base_doc();
+    doc["goal"] = doc["start"].clone();
+    assert_input_error(&solve_doc("start-goal", &doc), &["start and goal are both node 0"]);
+}
+
+#[test]
+fn bad_input_more_nodes_than_capacity() {
+    let inst = random_instance(129, 0.05, 31_000.0, 4);
+    let doc: Value = serde_json::from_str(&inst.to_json()).unwrap();
+    assert_input_error(&solve_doc("capacity", &doc), &["129 nodes", "capacity of 128"]);
+}
+
+#[test]
+fn bad_input_goal_unreachable() {
+    let mut doc = base_doc();
+    let goal = doc["goal"].as_u64().unwrap();
+    doc["edges"]
+        .as_array_mut()
+        .unwrap()
+        .retain(|e| e["a"].as_u64() != Some(goal) && e["b"].as_u64() != Some(goal));
+    assert_input_error(&solve_doc("unreachable", &doc), &["no path joins start 0 and goal 29"]);
+}
+
+#[test]
+fn bad_input_unknown_algorithm() {
+    let dir = scratch("algorithm");
+    let path = write_instance(&dir, "ok.json", &paper_like(3));
+    let out = planner(&["solve", "--instance", path_str(&path), "--algorithm", "ga"]);
+    assert_usage_error(&out, &["invalid value 'ga'", "--algorithm", "pso", "bbo"]);
+}
+
+#[test]
+fn bad_input_iterations_zero_or_negative() {
+    let dir = scratch("iterations");
+    let path = write_instance(&dir, "ok.json", &paper_like(3));
+    for bad in ["0", "-3"] {
+        let out = planner(&["solve", "--instance", path_str(&path), "--iterations", bad]);
+        assert_usage_error(&out, &[&format!("invalid value '{bad}'"), "--iterations"]);
+    }
+    let out = planner(&["solve", "--instance", path_str(&path), "--iterations", "many"]);
+    assert_usage_error(&out, &["invalid value 'many'", "--iterations"]);
+    let out = planner(&["solve", "--instance", path_str(&path), "--seed", "-1"]);
+    assert_usage_error(&out, &["invalid value '-1'", "--seed"]);
+}
+
+#[test]
+fn bad_input_malformed_op_file() {
+    let dir = scratch("bad-op");
+    let cases = [
+        (
+            "fields.txt",
+            "5 1\n0 0 0\n1 1\n",
+            "line 3: expected 3 fields (x y score), found 2",
+        ),
+        (
+            "word.txt",
+            "5 1\n0 0 0\n1 x 0\n",
+            "line 3, column 3: y \"x\" is not a number",
+        ),
+        ("paths.txt", "5 2\n0 0 0\n1 1 0\n", "P = 2"),
+        (
+            "negative.txt",
+            "5 1\n0 0 0\n1 1 -4\n",
+            "line 3, column 5: score = -4 is invalid",
+        ),
+        (
+            "nan.txt",
+            "NaN 1\n0 0 0\n1 1 0\n",
+            "line 1, column 1: Tmax = NaN is invalid",
+        ),
+        ("short.txt", "5 1\n0 0 0\n", "1 node line(s)"),
+        ("empty.txt", "", "empty file"),
+    ];
+    for (name, text, needle) in cases {
+        let src = dir.join(name);
+        std::fs::write(&src, text).unwrap();
+        let out = planner(&["convert-op", path_str(&src), "--out", path_str(&dir.join("x.json"))]);
+        assert_input_error(&out, &[name, needle]);
+        assert!(!dir.join("x.json").exists(), "nothing is written for {name}");
+    }
+    // In a folder, the bad file is named even when good ones come first.
+    let tree = dir.join("tree");
+    std::fs::create_dir_all(tree.join("sub")).unwrap();
+    std::fs::write(tree.join("a.txt"), "5 1\n0 0 0\n1 1 0\n").unwrap();
+    std::fs::write(tree.join("sub/b.txt"), "5 1\n0 0 0\n1 1 zero\n").unwrap();
+    let out = planner(&["convert-op", path_str(&tree), "--out", path_str(&dir.join("out"))]);
+    assert_input_error(&out, &["sub/b.txt", "line 3, column 5: score \"zero\" is not a number"]);
+}
+
+#[test]
+fn bad_input_convert_op_missing_input_or_empty_folder() {
+    let dir = scratch("op-missing");
+    let out = planner(&["convert-op", "/nonexistent/op", "--out", path_str(&dir)]);
+    assert_input_error(&out, &["cannot read /nonexistent/op"]);
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let out = planner(&["convert-op", path_str(&empty), "--out", path_str(&dir.join("o"))]);
+    assert_input_error(&out, &["no .txt benchmark files"]);
+}
+
+fn export_with_scenario(test: &str, scenario: &Value) -> Output {
+    let dir = scratch(test);
+    let path = write_json(&dir, "scenario.json", scenario);
+    let out = planner(&[
+        "export",
+        "--seed",
+        "1",
+        "--scenario",
+        path_str(&path),
+        "--out",
+        path_str(&dir.join("out.json")),
+    ]);
+    assert!(!dir.join("out.json").exists(), "nothing is written on error");
+    out
+}
+
+#[test]
+fn bad_input_malformed_scenario_file() {
+    let cases = [
+        (json!({"nodez": 40}), "unknown field `nodez`"),
+        (json!({"format": "auv-scenario/9"}), "`format`"),
+        (
+            json!({"nodes": 129}),
+            "`nodes` = 129 exceeds the planner's capacity of 128",
+        ),
+        (json!({"nodes": 10, "dynamic": 9}), "`dynamic` = 9"),
+        (json!({"sigma_m": -150}), "`sigma_m` = -150"),
+        (json!({"risk": [0, 1]}), "`risk[0]`"),
+        (json!({"chart": "atlantis"}), "unknown embedded chart `atlantis`"),
+        (json!([1, 2]), "JSON object"),
+    ];
+    for (doc, needle) in cases {
+        assert_input_error(&export_with_scenario("bad-scenario", &doc), &["scenario.json", needle]);
+    }
+    let dir = scratch("bad-scenario-text");
+    let nan = dir.join("nan.json");
+    std::fs::write(&nan, "{\"sigma_m\": NaN}").unwrap();
+    let out = planner(&[
+        "export",
+        "--seed",
+        "1",
+        "--scenario",
+        path_str(&nan),
+        "--out",
+        path_str(&dir.join("o.json")),
+    ]);
+    assert_input_error(&out, &["nan.json", "NaN is not a JSON number"]);
+    let out = planner(&[
+        "export",
+        "--seed",
+        "1",
+        "--scenario",
+        path_str(&dir.join("missing.json")),
+        "--out",
+        path_str(&dir.join("o.json")),
+    ]);
+    assert_input_error(&out, &["cannot read", "missing.json"]);
+    let out = planner(&["export", "--seed", "-4", "--out", path_str(&dir.join("o.json"))]);
+    assert_usage_error(&out, &["invalid value '-4'", "--seed"]);
+}
+
+/// A PNG of one colour (RGB, 8 bit).
+fn write_png(path: &Path, width: u32, height: u32, rgb: [u8; 3]) {
+    let file = std::fs::File::create(path).unwrap();
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut writer = enc.write_header().unwrap();
+    let data: Vec<u8> = (0..width * height).flat_map(|_| rgb).collect();
+    writer.write_image_data(&data).unwrap();
+}
+
+#[test]
+fn bad_input_chart_with_no_water() {
+    let dir = scratch("no-water");
+    // Sand colour everywhere: no cluster is water. The chart path is
+    // relative to the scenario file.
+    write_png(&dir.join("desert.png"), 40, 30, [220, 203, 156]);
+    let scenario = write_json(
+        &dir,
+        "scenario.json",
+        &json!({"chart": {"png": "desert.png", "metres_per_pixel": 10}}),
+    );
+    let out = planner(&[
+        "export",
+        "--seed",
+        "1",
+        "--scenario",
+        path_str(&scenario),
+        "--out",
+        path_str(&dir.join("out.json")),
+    ]);
+    assert_input_error(&out, &["scenario.json", "desert.png", "no navigable water"]);
+    assert!(!dir.join("out.json").exists());
+    // And a chart that is not a PNG at all.
+    std::fs::write(dir.join("desert.png"), "not a png").unwrap();
+    let out = planner(&[
+        "export",
+        "--seed",
+        "1",
+        "--scenario",
+        path_str(&scenario),
+        "--out",
+        path_str(&dir.join("out.json")),
+    ]);
+    assert_input_error(&out, &["desert.png"]);
+}
