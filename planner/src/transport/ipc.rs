@@ -309,7 +309,7 @@ impl<S: Service> Waker for IpcWaker<S> {
             // idle core), so a spinner does not starve the process it waits
             // for on a small machine.
             self.polls = self.polls.wrapping_add(1);
-            if self.polls % SPIN_YIELD_EVERY == 0 {
+            if self.polls.is_multiple_of(SPIN_YIELD_EVERY) {
                 std::thread::yield_now();
             } else {
                 core::hint::spin_loop();
