@@ -377,6 +377,7 @@ impl PlannerCore {
             return;
         }
         let arrived = prev.known && !restarted && s.arrivals > prev.arrivals;
+        let at_goal = self.have_snapshot && s.to_node == self.snapshot.goal;
         if arrived {
             events(&ServiceEvent::Arrival {
                 t,
@@ -386,8 +387,10 @@ impl PlannerCore {
                 weight: s.weight,
                 time_left_s: s.time_left_s,
             });
-            self.trigger(TriggerKind::Arrival, s.header.sent_mono_ns, received_ns, t);
-        } else if self.needs_initial_plan(s) {
+            if !at_goal {
+                self.trigger(TriggerKind::Arrival, s.header.sent_mono_ns, received_ns, t);
+            }
+        } else if !at_goal && self.needs_initial_plan(s) {
             self.trigger(TriggerKind::Initial, s.header.sent_mono_ns, received_ns, t);
         }
         if self.pending.is_none() {
@@ -450,7 +453,9 @@ impl PlannerCore {
     }
 
     fn sensor_trigger(&mut self) -> Option<TriggerKind> {
-        if !self.vehicle.known || self.plan.is_none() || self.finished {
+        // Nothing is left to plan once the vehicle heads to (or works at) the goal.
+        let at_goal = self.vehicle.to_node == self.snapshot.goal as usize;
+        if !self.vehicle.known || self.plan.is_none() || self.finished || at_goal {
             return None;
         }
         let (start, budget, excluded) = self.planning_frame();
@@ -784,6 +789,24 @@ mod tests {
             crate::service::network::to_instance(&dst, "x"),
             crate::service::network::to_instance(&src, "x")
         );
+    }
+
+    #[test]
+    fn nothing_is_replanned_once_the_vehicle_is_at_the_goal() {
+        let inst = random_instance(20, 0.35, 20_000.0, 8);
+        let mut c = core();
+        let mut sink = |_: &ServiceEvent| {};
+        c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
+        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
+        let r = c.replan().unwrap().unwrap();
+        c.published(&r, mono_now_ns(), &mut sink);
+        let goal = inst.goal as u32;
+        c.on_state(&state(2, goal, 1, &[0, goal as u8], 1_000.0), mono_now_ns(), &mut sink);
+        assert!(!c.has_pending(), "an arrival at the goal needs no plan");
+        let mut cut = inst.clone();
+        cut.edges.clear();
+        c.on_snapshot(&snapshot(&cut, 1), mono_now_ns(), &mut sink);
+        assert!(!c.has_pending(), "a network change at the goal needs no plan");
     }
 
     #[test]
