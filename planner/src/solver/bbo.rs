@@ -291,7 +291,12 @@ impl Solver for Bbo {
             warm_eval = problem.evaluate(route);
         }
         self.best_eval = super::WORST;
-        for h in 0..habitats {
+        let mut h = 0;
+        while h + 1 < habitats {
+            self.evaluate_pair(problem, h, h + 1);
+            h += 2;
+        }
+        if h < habitats {
             self.evaluate(problem, h);
         }
         if let (Some(route), Some(e)) = (warm, warm_eval)

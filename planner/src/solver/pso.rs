@@ -259,6 +259,22 @@ impl Pso {
         false
     }
 
+    /// Decodes every particle (in pairs) and takes the results in order;
+    /// `true` when the best-so-far improved.
+    fn evaluate_all(&mut self, problem: &Problem) -> bool {
+        let mut improved = false;
+        let particles = self.settings.particles;
+        let mut i = 0;
+        while i + 1 < particles {
+            improved |= self.evaluate_pair(problem, i);
+            i += 2;
+        }
+        if i < particles {
+            improved |= self.evaluate(problem, i);
+        }
+        improved
+    }
+
     fn refresh_gbest(&mut self) {
         let row = self.best_particle * self.stride..(self.best_particle + 1) * self.stride;
         self.gbest[..self.stride].copy_from_slice(&self.pbest[row]);
@@ -398,20 +414,12 @@ impl Solver for Pso {
             warm_eval = problem.evaluate(route);
         }
 
-        // The first decode of each particle is its personal best.
+        // The first decode of each particle is its personal best: against
+        // `WORST`, the evaluation below takes every one.
         self.best_eval = super::WORST;
         self.best_particle = 0;
-        for i in 0..particles {
-            let row = i * stride..(i + 1) * stride;
-            let e = self.decoder.decode(problem, &self.x[row.clone()], &mut self.scratch);
-            self.pbest[row.clone()].copy_from_slice(&self.x[row]);
-            self.pbest_eval[i] = e;
-            if problem.better(&e, &self.best_eval) {
-                self.best = self.scratch;
-                self.best_eval = e;
-                self.best_particle = i;
-            }
-        }
+        self.pbest_eval[..particles].fill(super::WORST);
+        self.evaluate_all(problem);
         if let (Some(route), Some(e)) = (warm, warm_eval)
             && problem.better(&e, &self.best_eval)
         {
@@ -429,17 +437,7 @@ impl Solver for Pso {
     fn step(&mut self, problem: &Problem, _rng: &mut PlannerRng) -> bool {
         let w = self.inertia(self.iteration) as f32;
         update_swarm(self, w);
-        let mut improved = false;
-        let particles = self.settings.particles;
-        let mut i = 0;
-        while i + 1 < particles {
-            improved |= self.evaluate_pair(problem, i);
-            i += 2;
-        }
-        if i < particles {
-            improved |= self.evaluate(problem, i);
-        }
-        if improved {
+        if self.evaluate_all(problem) {
             self.refresh_gbest();
         }
         self.iteration += 1;
