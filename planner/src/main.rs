@@ -35,6 +35,8 @@ enum Command {
     Export(cli::export::Args),
     /// Convert classic orienteering benchmark files (Tsiligirides, Chao) into instance JSON.
     ConvertOp(cli::convert_op::Args),
+    /// Run the paper's Monte Carlo study: PSO and BBO on many network changes.
+    Montecarlo(cli::montecarlo::Args),
     /// The three-process system: `mission`, `serve`, `bench-latency`.
     #[command(flatten)]
     Ipc(planner::mission::cli::IpcCommand),
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Solve(args) => cli::solve::run(args),
         Command::Export(args) => cli::export::run(args),
         Command::ConvertOp(args) => cli::convert_op::run(args),
+        Command::Montecarlo(args) => cli::montecarlo::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

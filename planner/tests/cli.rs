@@ -190,7 +190,6 @@ fn assert_figures_match(doc: &Value, sol: &Value) {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn solve_json_figures_equal_the_recomputation_from_the_instance() {
     let dir = scratch("figures");
     for (k, objective) in [Objective::MaxWeight, Objective::PaperCost { phi1: 0.01, phi2: 2.0 }]
@@ -244,7 +243,6 @@ fn instances_round_trip_through_json_bit_for_bit() {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn solve_without_json_prints_a_readable_summary() {
     let dir = scratch("summary");
     let path = write_instance(&dir, "paper.json", &paper_like(5));
@@ -265,7 +263,6 @@ fn solve_without_json_prints_a_readable_summary() {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn same_seed_gives_identical_json_except_solve_ms() {
     let dir = scratch("determinism");
     let path = write_instance(&dir, "paper.json", &paper_like(21));
@@ -289,7 +286,6 @@ fn best_known() -> BestKnown {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn classic_instances_convert_and_solve_within_the_known_optimum() {
     let dir = scratch("classic");
     let best = best_known();
@@ -439,7 +435,6 @@ fn export_follows_a_scenario_file() {
 }
 
 #[test]
-#[ignore = "TEMPORARY: needs PSO/BBO from main"]
 fn an_exported_snapshot_solves_with_checkable_figures() {
     let (path, out) = export("export-solve", &["--seed", "5"]);
     assert_ok(&out);
@@ -772,4 +767,89 @@ fn bad_input_chart_with_no_water() {
         path_str(&dir.join("out.json")),
     ]);
     assert_input_error(&out, &["desert.png"]);
+}
+
+#[test]
+fn montecarlo_writes_the_table_csv_and_figures_deterministically() {
+    let dir = scratch("montecarlo");
+    let run = |out: &Path| {
+        planner(&[
+            "montecarlo",
+            "--runs",
+            "3",
+            "--nodes",
+            "12",
+            "--seed",
+            "5",
+            "--threads",
+            "2",
+            "--out",
+            path_str(out),
+        ])
+    };
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let out = run(&a);
+    assert_ok(&out);
+    let table = stdout(&out);
+    for needle in [
+        "cost",
+        "cpu_time (ms)",
+        "route_time (s)",
+        "distance (m)",
+        "tasks",
+        "weight",
+        "violation (s)",
+        "feasible (rate)",
+        "pso",
+        "bbo",
+    ] {
+        assert!(table.contains(needle), "{needle} missing from\n{table}");
+    }
+    for f in [
+        "runs.csv",
+        "summary.txt",
+        "fig4-cost-cpu.svg",
+        "fig5-time-distance.svg",
+        "fig6-tasks-weight.svg",
+        "fig7-violation.svg",
+        "fig8-network.svg",
+    ] {
+        assert!(a.join(f).is_file(), "{f} not written");
+    }
+    let csv = std::fs::read_to_string(a.join("runs.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("run,algorithm,seed,cost,cpu_ms,route_time_s,distance_m,tasks,weight,violation_s,feasible")
+    );
+    assert_eq!(lines.count(), 6, "3 runs x 2 algorithms");
+    // Same seed, same rows (the CPU time column aside).
+    assert_ok(&run(&b));
+    let strip = |p: &Path| -> Vec<String> {
+        std::fs::read_to_string(p.join("runs.csv"))
+            .unwrap()
+            .lines()
+            .map(|l| {
+                let mut cols: Vec<&str> = l.split(',').collect();
+                cols.remove(4);
+                cols.join(",")
+            })
+            .collect()
+    };
+    assert_eq!(strip(&a), strip(&b));
+}
+
+#[test]
+fn montecarlo_rejects_bad_arguments() {
+    let dir = scratch("montecarlo-bad");
+    let out_dir = dir.join("out");
+    let o = path_str(&out_dir);
+    assert_usage_error(&planner(&["montecarlo", "--runs", "0", "--out", o]), &["--runs"]);
+    assert_usage_error(&planner(&["montecarlo", "--algorithms", "pso,ga", "--out", o]), &["ga"]);
+    assert_input_error(
+        &planner(&["montecarlo", "--nodes", "129", "--out", o]),
+        &["--nodes 129", "128"],
+    );
+    assert_input_error(&planner(&["montecarlo", "--nodes", "1", "--out", o]), &["--nodes 1"]);
+    assert!(!out_dir.exists(), "nothing is written for rejected arguments");
 }

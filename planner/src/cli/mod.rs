@@ -10,6 +10,7 @@
 
 pub mod convert_op;
 pub mod export;
+pub mod montecarlo;
 pub mod solve;
 
 use std::io::{self, Write};
