@@ -2,14 +2,13 @@
 //! priority vector, and a full paper budget of PSO (150 particles × 150
 //! iterations) and BBO (50 habitats × 150 generations), at n = 40, 80, 128.
 //!
-//! Networks: `fixtures::random_instance`, eight per size with edge density
-//! cycling through 0.3, 0.4, 0.5, tasks and speed as in the paper's model
-//! (ρ ~ U[1, 10], ξ ~ U[0.1, 1], δ ~ U[120, 900] s, v = 1.5 m/s) and the
-//! paper's 31 000 s budget. Each iteration takes the next network in turn,
-//! so one odd network (some need the decoder's repair far more often) does
-//! not decide the figure. They stand in for the scenario generator's
-//! chart-based networks; the benches will switch to those when that
-//! generator lands.
+//! Networks: the scenario generator's paper-model networks on the embedded
+//! Benoit's Cove chart (`scenario::World::generate` with `nodes` = n and
+//! every other setting at its default: 10 dynamic waypoints, tasks
+//! ρ ~ U[1, 10], ξ ~ U[0.1, 1], δ ~ U[120, 900] s, v = 1.5 m/s, 31 000 s
+//! budget), eight seeds per size. Each iteration takes the next network in
+//! turn, so one odd network (some need the decoder's repair far more often)
+//! does not decide the figure.
 //!
 //! Run: `cargo bench --bench solvers -- --warm-up-time 1 --measurement-time 3`
 //! (single-threaded; the medians are what the targets refer to).
@@ -25,24 +24,27 @@ use std::hint::black_box;
 use criterion::measurement::{Measurement, ValueFormatter};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use planner::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN};
-use planner::fixtures::random_instance;
 use planner::problem::{MAX_NODES, Problem};
 use planner::rng::PlannerRng;
 use planner::route::Route;
+use planner::scenario::{ScenarioConfig, World, load_map};
 use planner::solver::bbo::{Bbo, BboSettings};
 use planner::solver::pso::{Pso, PsoSettings};
 use planner::solver::{Budget, Solver, run};
 
 const SIZES: [usize; 3] = [40, 80, 128];
-const DENSITIES: [f64; 3] = [0.3, 0.4, 0.5];
 const NETWORKS: usize = 8;
-const BUDGET_S: f64 = 31_000.0;
 
 fn problems(n: usize) -> Vec<Problem> {
+    let config = ScenarioConfig {
+        nodes: n,
+        ..ScenarioConfig::default()
+    };
+    let map = load_map(&config, 1000).expect("the embedded chart loads");
     (0..NETWORKS)
         .map(|k| {
-            let inst = random_instance(n, DENSITIES[k % DENSITIES.len()], BUDGET_S, 1000 + k as u64);
-            Problem::from_instance(&inst).expect("bench networks at density >= 0.3 are connected")
+            let world = World::generate(&config, 1000 + k as u64, &map).expect("the default scenario generates");
+            Problem::from_instance(&world.snapshot("bench")).expect("scenario networks join start and goal")
         })
         .collect()
 }
@@ -58,11 +60,13 @@ fn decode<M: Measurement>(c: &mut Criterion<M>, name: &str) {
             .collect();
         let mut d = Decoder::new();
         let mut r = Route::new();
-        let mut k = 0;
+        let mut k = 0usize;
         g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| {
-                k = (k + 1) & 255;
-                black_box(d.decode(&ps[k % NETWORKS], &pool[k], &mut r))
+                k = k.wrapping_add(1);
+                // Next network every 512 decodes: a solver decodes thousands
+                // of vectors per network, with that network's tables in cache.
+                black_box(d.decode(&ps[(k / 512) % NETWORKS], &pool[k & 255], &mut r))
             })
         });
     }

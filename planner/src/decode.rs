@@ -17,14 +17,26 @@
 //! mantissa (values closer than about 1e-13 relative tie); ties go to the
 //! lower node id.
 //!
-//! How it is fast (issue 2 §7): each priority is packed once per decode into
-//! a positive `f64` *key* whose order is the priority order and whose lowest
-//! 7 bits hold the node id (see [`pack_key`]). Choosing the next node is then
-//! a single branch-free max over `key where reach ≤ slack else 0` across the
-//! padded row — a loop the compiler vectorises — and the winner's id is read
-//! back from its bits. Visited nodes get key 0. The loop is compiled three
-//! times (AVX-512, AVX2, baseline) and picked at run time; all three compute
-//! exactly the same max, so routes do not depend on the machine.
+//! How it is fast (issue 2 §7):
+//! - Each priority is packed once per decode into a positive `f64` *key*
+//!   whose order is the priority order and whose lowest 7 bits hold the node
+//!   id ([`pack_key`]). Choosing the next node is one branch-free max over
+//!   `key where reach ≤ slack and unvisited, else 0` across the padded row
+//!   (the look-ahead table of [`Problem`] already carries edge time plus
+//!   shortest time home, +∞ for non-edges), and the winner's id is read back
+//!   from its bits.
+//! - That scan is compiled three times (AVX-512 with intrinsics and the
+//!   visited set as a bit mask in the compare mask; AVX2 and baseline with
+//!   visited keys zeroed) and picked at run time. All three compute exactly
+//!   the same max, so routes do not depend on the machine (tests hold them
+//!   equal).
+//! - [`Decoder::decode_pair`] advances two walks in lock-step so the core
+//!   overlaps their serial scan → pick → next-row chains; the solvers decode
+//!   in pairs.
+//! - The repair runs, per cut point, an A* search with the look-ahead's
+//!   shortest time home as heuristic, pruned by the time left, so it only
+//!   explores near-quickest paths (`Decoder::repair`).
+//! - Nothing allocates: every buffer is a fixed array in the [`Decoder`].
 
 use crate::problem::{MAX_NODES, Problem};
 use crate::route::{Route, RouteEval};

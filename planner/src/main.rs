@@ -12,6 +12,12 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+/// Counts the service thread's calls into the system allocator and serves
+/// its small blocks from a start-up pool (`planner::service::alloc`): the
+/// proof that the re-planning loop is allocation-free in steady state.
+#[global_allocator]
+static ALLOC: planner::service::alloc::PoolAlloc = planner::service::alloc::PoolAlloc;
+
 /// Real-time task-assign route planner for AUVs (PSO and BBO on a
 /// priority-vector encoding).
 #[derive(Parser, Debug)]
@@ -33,11 +39,18 @@ enum Command {
     Montecarlo(cli::montecarlo::Args),
     /// Gap to the optimum and solve time of each algorithm on a folder of instances.
     Quality(cli::quality::Args),
+    /// The three-process system: `mission`, `serve`, `bench-latency`.
+    #[command(flatten)]
+    Ipc(planner::mission::cli::IpcCommand),
 }
 
 fn main() -> ExitCode {
+    planner::service::alloc::mark_installed();
     let parsed = Cli::parse();
     let result = match parsed.command {
+        // These report their own errors in the same one-line form and keep
+        // their documented exit codes (130 when interrupted).
+        Command::Ipc(cmd) => return planner::mission::cli::run(&cmd),
         Command::Solve(args) => cli::solve::run(args),
         Command::Export(args) => cli::export::run(args),
         Command::ConvertOp(args) => cli::convert_op::run(args),

@@ -9,8 +9,9 @@
 use crate::instance::{Instance, Objective};
 use crate::problem::{FEASIBILITY_REL_TOL, MAX_NODES, Problem};
 
-/// A node sequence of at most [`MAX_NODES`] ids.
-#[derive(Clone, Copy, PartialEq, Eq)]
+/// A node sequence of at most [`MAX_NODES`] ids. Equality compares the
+/// sequences only (bytes past `len` are scratch).
+#[derive(Clone, Copy)]
 pub struct Route {
     nodes: [u8; MAX_NODES],
     len: usize,
@@ -108,6 +109,14 @@ impl Default for Route {
         Self::new()
     }
 }
+
+impl PartialEq for Route {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_bytes() == other.as_bytes()
+    }
+}
+
+impl Eq for Route {}
 
 impl core::fmt::Debug for Route {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -324,5 +333,19 @@ impl RouteStats {
             tasks: eval.tasks,
             feasible: eval.feasible,
         })
+    }
+}
+
+#[cfg(test)]
+mod equality_tests {
+    use super::Route;
+
+    #[test]
+    fn equal_sequences_are_equal_whatever_the_scratch_bytes() {
+        let mut a = Route::from_slice(&[0, 5, 9, 3]).unwrap();
+        a.truncate(2);
+        let b = Route::from_slice(&[0, 5]).unwrap();
+        assert_eq!(a, b);
+        assert_ne!(a, Route::from_slice(&[0, 5, 9]).unwrap());
     }
 }

@@ -1,7 +1,187 @@
-//! `sensor-sim`: moves the drifting waypoints and publishes snapshots.
-//! The iceoryx2 process arrives with the three-process system; until then this
-//! binary only reports that it is not wired yet.
-fn main() {
-    eprintln!("sensor-sim: the three-process system is not built yet (see the planner's `mission` command)");
-    std::process::exit(2);
+//! `sensor-sim`: the sensor. Loads the same scenario as the other processes
+//! and, every sensor period of mission time (default 60 s), redraws the
+//! dynamic waypoints inside their bounds and publishes the network as a
+//! waypoint snapshot over iceoryx2.
+//!
+//! Clock: sensor-sim keeps no clock of its own; it follows the vehicle's
+//! mission time from its state messages (exactly in lockstep, extrapolated
+//! with the vehicle's time scale otherwise), so a lockstep vehicle that stops
+//! at an update time gets exactly one update there. It publishes epoch 0 at
+//! start and exits when the vehicle reports the end of the mission.
+//!
+//! Exit status: 0 at the end of the mission, 1 on an error, 2 on bad
+//! arguments, 130 when stopped by a signal.
+
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::Parser;
+use planner::mission::world::{MissionWorld, ScenarioArgs, load_world};
+use planner::msg::{Outcome, VehicleState, WaypointSnapshot};
+use planner::service::network::write_snapshot;
+use planner::transport::clock::mono_now_ns;
+use planner::transport::guard::Guarded;
+use planner::transport::ipc::{IpcContext, IpcOutbox, Shm, Stamp};
+use planner::transport::{IpcArgs, Outbox, Role, Wake, Waker, signal};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "sensor-sim",
+    about = "Simulated sensor: redraws the dynamic waypoints and publishes snapshots"
+)]
+struct Args {
+    #[command(flatten)]
+    ipc: IpcArgs,
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// Mission time between sensor updates, s (default: the scenario's).
+    #[arg(long)]
+    sensor_period_s: Option<f64>,
+}
+
+#[derive(Debug, thiserror::Error)]
+enum Error {
+    #[error(transparent)]
+    Setup(#[from] planner::transport::SetupError),
+    #[error(transparent)]
+    World(#[from] planner::mission::world::WorldError),
+    #[error("transport: {0}")]
+    Transport(#[from] planner::transport::TransportError),
+    #[error(transparent)]
+    Snapshot(#[from] planner::service::network::SnapshotError),
+    #[error("--sensor-period-s {0}: must be > 0")]
+    BadPeriod(f64),
+}
+
+/// The vehicle's clock as last reported.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct VehicleClock {
+    mission_time_s: f64,
+    sent_mono_ns: u64,
+    /// 0: lockstep.
+    time_scale: f64,
+}
+
+impl VehicleClock {
+    /// The vehicle's mission time at `now_ns`.
+    fn at(&self, now_ns: u64) -> f64 {
+        if self.time_scale > 0.0 {
+            self.mission_time_s + now_ns.saturating_sub(self.sent_mono_ns) as f64 * 1e-9 * self.time_scale
+        } else {
+            self.mission_time_s
+        }
+    }
+}
+
+fn publish(
+    out: &mut IpcOutbox<Shm, WaypointSnapshot>,
+    world: &MissionWorld,
+    epoch: u64,
+    period_s: f64,
+) -> Result<(), Error> {
+    let inst = world.snapshot();
+    let mut res = Ok(());
+    out.publish(&mut |m| {
+        res = write_snapshot(&inst, epoch, m);
+        m.header.mission_time_s = epoch as f64 * period_s;
+        m.next_update_s = (epoch + 1) as f64 * period_s;
+    })?;
+    Ok(res?)
+}
+
+fn run(args: &Args) -> Result<Outcome, Error> {
+    signal::install();
+    let mut world = load_world(&args.scenario)?;
+    let period = args.sensor_period_s.unwrap_or(world.sensor_period_s());
+    if !(period.is_finite() && period > 0.0) {
+        return Err(Error::BadPeriod(period));
+    }
+    let fingerprint = world.fingerprint();
+    let opts = args.ipc.options()?;
+    let ctx = IpcContext::<Shm>::new(&opts, "sensor-sim")?;
+    let mut out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fingerprint))?;
+    let mut states = Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "sensor-sim");
+    let mut waker = ctx.waker(Role::Sensor)?;
+    let mut epoch = 0u64;
+    publish(&mut out, &world, epoch, period)?;
+    let mut clock: Option<VehicleClock> = None;
+    let mut outcome = Outcome::Running;
+    loop {
+        states.drain(&mut |s| {
+            clock = Some(VehicleClock {
+                mission_time_s: s.header.mission_time_s,
+                sent_mono_ns: s.header.sent_mono_ns,
+                time_scale: s.time_scale,
+            });
+            if let Some(o) = planner::msg::FromCode::from_code(s.outcome) {
+                outcome = o;
+            }
+        })?;
+        if outcome != Outcome::Running {
+            return Ok(outcome);
+        }
+        let now = mono_now_ns();
+        let t = clock.map_or(0.0, |c| c.at(now));
+        while t >= (epoch + 1) as f64 * period {
+            epoch += 1;
+            world.redraw(epoch);
+            publish(&mut out, &world, epoch, period)?;
+        }
+        let wait = match clock {
+            Some(c) if c.time_scale > 0.0 => {
+                let to_next = ((epoch + 1) as f64 * period - t) / c.time_scale;
+                Duration::from_secs_f64(to_next.clamp(0.0, 0.05))
+            }
+            _ => Duration::from_millis(50),
+        };
+        match waker.wait(wait)? {
+            Wake::Shutdown => return Ok(Outcome::Aborted),
+            Wake::Timeout => out.refresh(),
+            Wake::Woken(_) => {}
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let args = match Args::try_parse() {
+        Ok(a) => a,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+        }
+    };
+    match run(&args) {
+        Ok(Outcome::Aborted) => ExitCode::from(130),
+        Ok(_) => ExitCode::SUCCESS,
+        Err(e @ Error::BadPeriod(_)) => {
+            eprintln!("sensor-sim: error: {e}");
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("sensor-sim: error: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clock_follows_the_vehicle_exactly_in_lockstep_and_extrapolates_otherwise() {
+        let lock = VehicleClock {
+            mission_time_s: 120.0,
+            sent_mono_ns: 1_000,
+            time_scale: 0.0,
+        };
+        assert_eq!(lock.at(9_000_000_000), 120.0);
+        let scaled = VehicleClock {
+            mission_time_s: 120.0,
+            sent_mono_ns: 1_000_000_000,
+            time_scale: 1000.0,
+        };
+        assert_eq!(scaled.at(1_010_000_000), 130.0);
+        assert_eq!(scaled.at(0), 120.0, "a clock never runs backwards");
+    }
 }

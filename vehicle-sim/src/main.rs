@@ -1,7 +1,313 @@
-//! `vehicle-sim`: follows the latest plan edge by edge and publishes its state.
-//! The iceoryx2 process arrives with the three-process system; until then this
-//! binary only reports that it is not wired yet.
-fn main() {
-    eprintln!("vehicle-sim: the three-process system is not built yet (see the planner's `mission` command)");
-    std::process::exit(2);
+//! `vehicle-sim`: the simulated AUV. Follows the latest plan over iceoryx2,
+//! publishes its state at a fixed rate and on every arrival, and ends at the
+//! goal (success) or when its time runs out (failure).
+//!
+//! Time: scaled (default 1000× real time; the mission clock starts with the
+//! first waypoint snapshot) or `--lockstep`: as fast as possible, stopping at
+//! every arrival and every sensor update until the planner has answered, so
+//! the same seeds give the same mission.
+//!
+//! Exit status: 0 when the mission ended (goal or time out), 1 on an error,
+//! 2 on bad arguments, 130 when stopped by a signal.
+
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use clap::Parser;
+use planner::mission::world::{ScenarioArgs, load_world};
+use planner::msg::{Outcome, Plan, PlannerStatus, VehicleEvent, VehicleState, WaypointSnapshot};
+use planner::transport::clock::mono_now_ns;
+use planner::transport::guard::Guarded;
+use planner::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
+use planner::transport::{IpcArgs, Outbox, Role, Wake, Waker, signal};
+use vehicle_sim::sim::{SimEvent, VehicleSim};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "vehicle-sim",
+    about = "Simulated AUV following the planner's plans over iceoryx2"
+)]
+struct Args {
+    #[command(flatten)]
+    ipc: IpcArgs,
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// Run as fast as possible, waiting for the planner's answer at every
+    /// arrival and sensor update (deterministic).
+    #[arg(long)]
+    lockstep: bool,
+    /// Mission seconds per real second (ignored with --lockstep).
+    #[arg(long, default_value_t = 1000.0)]
+    time_scale: f64,
+    /// State messages per real second in scaled time.
+    #[arg(long, default_value_t = 20.0)]
+    state_rate_hz: f64,
+    /// Lockstep: give up when an answer takes longer than this, real s.
+    #[arg(long, default_value_t = 30.0)]
+    answer_timeout_s: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+enum Error {
+    #[error(transparent)]
+    Setup(#[from] planner::transport::SetupError),
+    #[error(transparent)]
+    World(#[from] planner::mission::world::WorldError),
+    #[error("transport: {0}")]
+    Transport(#[from] planner::transport::TransportError),
+    #[error("{0}")]
+    Usage(String),
+    #[error(
+        "no answer within {0} s while waiting for {1} ({2}): are the planner and sensor-sim running with the same --ipc-prefix?"
+    )]
+    NoAnswer(f64, &'static str, String),
+}
+
+type S = Shm;
+
+struct Ports {
+    waker: IpcWaker<S>,
+    state: IpcOutbox<S, VehicleState>,
+    snapshots: Guarded<WaypointSnapshot, IpcInbox<S, WaypointSnapshot>>,
+    plans: Guarded<Plan, IpcInbox<S, Plan>>,
+    status: Guarded<PlannerStatus, IpcInbox<S, PlannerStatus>>,
+}
+
+/// The latest planner status seen.
+#[derive(Clone, Copy, Default)]
+struct Answered {
+    session: u64,
+    state_seq: u64,
+    epoch: u64,
+}
+
+struct Vehicle {
+    sim: VehicleSim,
+    ports: Ports,
+    answered: Answered,
+    time_scale: f64,
+}
+
+impl Vehicle {
+    /// Drains every inbox: snapshots first, then plans, then status (a plan
+    /// answering a trigger is sent before the status that says so).
+    fn drain(&mut self) -> Result<(), Error> {
+        let sim = &mut self.sim;
+        self.ports.snapshots.drain(&mut |s| sim.apply_snapshot(s))?;
+        let mut rejected = Vec::new();
+        self.ports.plans.drain(&mut |p| {
+            if let Err(kind) = sim.offer_plan(p) {
+                rejected.push((kind, p.header.fingerprint));
+            }
+        })?;
+        for (kind, fp) in rejected {
+            self.ports.plans.reject_later(kind, fp);
+        }
+        let answered = &mut self.answered;
+        self.ports.status.drain(&mut |st| {
+            *answered = Answered {
+                session: st.handled_state_session,
+                state_seq: st.handled_state_seq,
+                epoch: st.handled_epoch,
+            }
+        })?;
+        Ok(())
+    }
+
+    fn publish(&mut self, event: VehicleEvent, needs_answer: bool) -> Result<u64, Error> {
+        let (sim, scale) = (&self.sim, self.time_scale);
+        Ok(self
+            .ports
+            .state
+            .publish(&mut |m| sim.fill_state(event, scale, needs_answer, m))?)
+    }
+
+    /// Waits until `done` holds, draining inputs; `false` on shutdown.
+    fn wait_for(&mut self, timeout_s: f64, what: &'static str, done: &dyn Fn(&Vehicle) -> bool) -> Result<bool, Error> {
+        let t0 = Instant::now();
+        loop {
+            self.drain()?;
+            if done(self) {
+                return Ok(true);
+            }
+            if t0.elapsed().as_secs_f64() > timeout_s {
+                let seen = format!(
+                    "mission time {:.1} s, snapshot epoch {}, planner answered state {} and epoch {}",
+                    self.sim.time(),
+                    self.sim.epoch(),
+                    self.answered.state_seq,
+                    self.answered.epoch
+                );
+                return Err(Error::NoAnswer(timeout_s, what, seen));
+            }
+            match self.ports.waker.wait(Duration::from_millis(50))? {
+                Wake::Shutdown => return Ok(false),
+                Wake::Timeout => self.ports.state.refresh(),
+                Wake::Woken(_) => {}
+            }
+        }
+    }
+
+    fn answered(&self, session: u64, seq: u64) -> bool {
+        self.answered.session == session && self.answered.state_seq >= seq
+    }
+
+    fn lockstep(&mut self, timeout_s: f64, session: u64) -> Result<Outcome, Error> {
+        let seq = self.publish(VehicleEvent::Start, true)?;
+        if !self.wait_for(timeout_s, "the first plan", &|v| v.answered(session, seq))? {
+            return Ok(Outcome::Aborted);
+        }
+        loop {
+            let tick = self.sim.epoch_next_update();
+            match self.sim.step_until(tick) {
+                Some(SimEvent::Arrival { .. }) => {
+                    let seq = self.publish(VehicleEvent::Arrival, true)?;
+                    if !self.wait_for(timeout_s, "the planner's answer", &|v| v.answered(session, seq))? {
+                        return Ok(Outcome::Aborted);
+                    }
+                }
+                Some(SimEvent::TaskDone { .. }) => {}
+                Some(SimEvent::Finished(outcome)) => {
+                    self.publish(VehicleEvent::Finished, false)?;
+                    return Ok(outcome);
+                }
+                None => {
+                    let epoch = self.sim.epoch() + 1;
+                    let seq = self.publish(VehicleEvent::Tick, true)?;
+                    let ok = self.wait_for(timeout_s, "the sensor update", &|v| {
+                        v.sim.epoch() >= epoch && v.answered(session, seq) && v.answered.epoch >= epoch
+                    })?;
+                    if !ok {
+                        return Ok(Outcome::Aborted);
+                    }
+                }
+            }
+        }
+    }
+
+    fn scaled(&mut self, rate_hz: f64) -> Result<Outcome, Error> {
+        let t0 = mono_now_ns();
+        let scale = self.time_scale;
+        let period_ns = (1e9 / rate_hz) as u64;
+        let mut next_periodic = t0;
+        self.publish(VehicleEvent::Start, false)?;
+        loop {
+            let now = mono_now_ns();
+            let t = (now - t0) as f64 * 1e-9 * scale;
+            while let Some(ev) = self.sim.step_until(t) {
+                match ev {
+                    SimEvent::Arrival { .. } => {
+                        self.publish(VehicleEvent::Arrival, false)?;
+                    }
+                    SimEvent::TaskDone { .. } => {}
+                    SimEvent::Finished(outcome) => {
+                        self.publish(VehicleEvent::Finished, false)?;
+                        return Ok(outcome);
+                    }
+                }
+            }
+            if now >= next_periodic {
+                self.publish(VehicleEvent::Periodic, false)?;
+                next_periodic = now + period_ns;
+            }
+            let to_event_ns = ((self.sim.next_event_time() - t) / scale * 1e9).max(0.0);
+            let wait_ns = (next_periodic.saturating_sub(now) as f64).min(to_event_ns).min(50e6);
+            match self.ports.waker.wait(Duration::from_nanos(wait_ns as u64))? {
+                Wake::Shutdown => return Ok(Outcome::Aborted),
+                Wake::Timeout => self.ports.state.refresh(),
+                Wake::Woken(_) => {}
+            }
+            self.drain()?;
+        }
+    }
+}
+
+fn run(args: &Args) -> Result<Outcome, Error> {
+    if !(args.time_scale.is_finite() && args.time_scale > 0.0) {
+        return Err(Error::Usage(format!("--time-scale {}: must be > 0", args.time_scale)));
+    }
+    if !(args.state_rate_hz.is_finite() && args.state_rate_hz > 0.0) {
+        return Err(Error::Usage(format!(
+            "--state-rate-hz {}: must be > 0",
+            args.state_rate_hz
+        )));
+    }
+    if !(args.answer_timeout_s.is_finite() && args.answer_timeout_s > 0.0) {
+        return Err(Error::Usage(format!(
+            "--answer-timeout-s {}: must be > 0",
+            args.answer_timeout_s
+        )));
+    }
+    signal::install();
+    let world = load_world(&args.scenario)?;
+    let fingerprint = world.fingerprint();
+    drop(world);
+    let opts = args.ipc.options()?;
+    let ctx = IpcContext::<S>::new(&opts, "vehicle-sim")?;
+    let stamp = Stamp::new(fingerprint);
+    let ports = Ports {
+        waker: ctx.waker(Role::Vehicle)?,
+        state: ctx.outbox::<VehicleState>(stamp)?,
+        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "vehicle-sim"),
+        plans: Guarded::new(ctx.inbox::<Plan>()?, fingerprint, "vehicle-sim"),
+        status: Guarded::new(ctx.inbox::<PlannerStatus>()?, fingerprint, "vehicle-sim"),
+    };
+    let mut v = Vehicle {
+        sim: VehicleSim::new(),
+        ports,
+        answered: Answered::default(),
+        time_scale: if args.lockstep { 0.0 } else { args.time_scale },
+    };
+    // The mission clock starts with the first snapshot.
+    let timeout = args.answer_timeout_s;
+    if !v.wait_for(timeout, "the first waypoint snapshot", &|v| v.sim.has_network())? {
+        return Ok(Outcome::Aborted);
+    }
+    let outcome = if args.lockstep {
+        v.lockstep(timeout, stamp.session)?
+    } else {
+        v.scaled(args.state_rate_hz)?
+    };
+    if outcome == Outcome::Aborted {
+        v.sim.abort();
+        v.publish(VehicleEvent::Finished, false)?;
+    }
+    let (tasks, weight, distance) = v.sim.totals();
+    eprintln!(
+        "vehicle-sim: {} at mission time {:.1} s: {} tasks, weight {:.2}, {:.0} m, route {:?}",
+        match outcome {
+            Outcome::GoalReached => "goal reached",
+            Outcome::TimedOut => "out of time",
+            Outcome::Aborted => "stopped",
+            Outcome::Running => "running",
+        },
+        v.sim.time(),
+        tasks,
+        weight,
+        distance,
+        v.sim.route()
+    );
+    Ok(outcome)
+}
+
+fn main() -> ExitCode {
+    let args = match Args::try_parse() {
+        Ok(a) => a,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+        }
+    };
+    match run(&args) {
+        Ok(Outcome::Aborted) => ExitCode::from(130),
+        Ok(_) => ExitCode::SUCCESS,
+        Err(e @ Error::Usage(_)) => {
+            eprintln!("vehicle-sim: error: {e}");
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("vehicle-sim: error: {e}");
+            ExitCode::from(1)
+        }
+    }
 }

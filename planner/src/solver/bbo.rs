@@ -2,7 +2,9 @@
 //!
 //! Contract: [`Bbo`] implements the anytime [`Solver`] contract on the same
 //! encoding, decoder and fitness as the PSO (a habitat is a priority vector
-//! in [[`PRIORITY_MIN`], [`PRIORITY_MAX`]]; [`Problem::better`] ranks). All
+//! in [[`PRIORITY_MIN`], [`PRIORITY_MAX`]], kept in `f32` like the swarm:
+//! half the bytes for the migration's scattered reads; [`Problem::better`]
+//! ranks). All
 //! buffers are allocated in [`Bbo::new`]; `start` and `step` do not
 //! allocate. Same seed, same routes, on every machine (integer thresholds,
 //! plain arithmetic, a total order for ranking).
@@ -39,7 +41,7 @@ use core::cmp::Ordering;
 
 use super::Solver;
 use super::lanes::LaneRng;
-use super::pso::{unit_from_bits, warm_count, warm_vector};
+use super::pso::{P_MAX, P_MIN, unit24, warm_count, warm_vector};
 use crate::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN, padded_len};
 use crate::problem::{MAX_NODES, Problem};
 use crate::rng::PlannerRng;
@@ -83,9 +85,9 @@ pub struct Bbo {
     n: usize,
     stride: usize,
     /// Habitats: `habitats` rows of `stride` priorities.
-    pop: Vec<f64>,
+    pop: Vec<f32>,
     /// The population as the generation began (migration reads from it).
-    old: Vec<f64>,
+    old: Vec<f32>,
     eval: Vec<RouteEval>,
     /// Habitat indices, best first.
     order: Vec<usize>,
@@ -267,25 +269,34 @@ impl Solver for Bbo {
         self.stride = stride;
         self.lanes.seed(rng);
         let habitats = self.settings.habitats;
-        let range = PRIORITY_MAX - PRIORITY_MIN;
+        let range = P_MAX - P_MIN;
         for x in &mut self.pop[..habitats * stride] {
-            *x = PRIORITY_MIN + range * unit_from_bits(self.lanes.next_u32());
+            *x = P_MIN + range * unit24(u64::from(self.lanes.next_u32()));
         }
         let mut warm_eval = None;
         if let Some(route) = warm {
-            warm_vector(route, n, &mut self.pop[..stride]);
-            let noise = WARM_NOISE_FRACTION * range;
+            let mut exact = [0.0f64; MAX_NODES];
+            warm_vector(route, n, &mut exact);
+            for (x, e) in self.pop[..n].iter_mut().zip(&exact) {
+                *x = *e as f32;
+            }
+            let noise = (WARM_NOISE_FRACTION * (PRIORITY_MAX - PRIORITY_MIN)) as f32;
             for h in 1..warm_count(habitats) {
                 let (head, rest) = self.pop.split_at_mut(h * stride);
                 for (d, x) in rest[..n].iter_mut().enumerate() {
-                    let u = unit_from_bits(self.lanes.next_u32());
-                    *x = (head[d] + noise * (2.0 * u - 1.0)).clamp(PRIORITY_MIN, PRIORITY_MAX);
+                    let u = unit24(u64::from(self.lanes.next_u32()));
+                    *x = (head[d] + noise * (2.0 * u - 1.0)).clamp(P_MIN, P_MAX);
                 }
             }
             warm_eval = problem.evaluate(route);
         }
         self.best_eval = super::WORST;
-        for h in 0..habitats {
+        let mut h = 0;
+        while h + 1 < habitats {
+            self.evaluate_pair(problem, h, h + 1);
+            h += 2;
+        }
+        if h < habitats {
             self.evaluate(problem, h);
         }
         if let (Some(route), Some(e)) = (warm, warm_eval)
@@ -308,7 +319,7 @@ impl Solver for Bbo {
         let (n, stride) = (self.n, self.stride);
         let habitats = self.settings.habitats;
         self.old[..habitats * stride].copy_from_slice(&self.pop[..habitats * stride]);
-        let range = PRIORITY_MAX - PRIORITY_MIN;
+        let range = P_MAX - P_MIN;
         let buckets = habitats as u64;
         // Locals, so the stores into `pop` cannot make the compiler reload
         // (and re-check) the tables on every dimension.
@@ -335,7 +346,7 @@ impl Solver for Bbo {
                 };
                 let source = old[order[rank] * stride + d];
                 let moved = if ((a & 0xFFFF) as u32) < immigrate { source } else { *x };
-                let fresh = PRIORITY_MIN + range * unit_from_bits(b as u32);
+                let fresh = P_MIN + range * unit24(b);
                 *x = if (((a >> 16) & 0xFFFF) as u32) < mutate {
                     fresh
                 } else {
@@ -409,7 +420,7 @@ mod tests {
         b.start(&p, &mut rng, None);
         for _ in 0..20 {
             let elites: Vec<usize> = b.order[..10].to_vec();
-            let before: Vec<Vec<f64>> = elites
+            let before: Vec<Vec<f32>> = elites
                 .iter()
                 .map(|&h| b.pop[h * b.stride..(h + 1) * b.stride].to_vec())
                 .collect();

@@ -7,6 +7,16 @@
 //! caller may publish it at any stop. [`run`] drives a solver to a fixed
 //! iteration budget or a deadline, whichever comes first, and says why it
 //! stopped (house style §1). Solvers know nothing of transport or files.
+//!
+//! [`Algorithm`] names the solvers for the command line (`pso`, `bbo`) and
+//! builds them with the paper's settings as `Box<dyn Solver + Send>`; boxes
+//! are solvers too, so generic code (the conformance suite in
+//! `planner/tests/conformance.rs`) takes them as they are.
+//!
+//! Randomness: PSO and BBO seed their own vector generators (`lanes.rs`)
+//! from the caller's `PlannerRng` in `start` and draw only from those
+//! afterwards, so a solve is a function of the seed the caller's generator
+//! was built from; `step` leaves the caller's generator untouched.
 
 pub mod auto;
 pub mod bbo;

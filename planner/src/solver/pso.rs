@@ -100,8 +100,8 @@ pub const WARM_FRACTION: f64 = 0.1;
 const WARM_NOISE_FRACTION: f64 = 0.1;
 
 /// The priority range in the swarm's precision.
-const P_MIN: f32 = PRIORITY_MIN as f32;
-const P_MAX: f32 = PRIORITY_MAX as f32;
+pub(crate) const P_MIN: f32 = PRIORITY_MIN as f32;
+pub(crate) const P_MAX: f32 = PRIORITY_MAX as f32;
 
 /// Number of population members seeded from a warm route: a tenth, at least 1.
 pub(crate) fn warm_count(population: usize) -> usize {
@@ -123,16 +123,9 @@ pub(crate) fn warm_vector(warm: &Route, n: usize, out: &mut [f64]) {
     }
 }
 
-/// Maps 32 random bits onto [0, 1) with a conversion every SIMD level has
-/// (i32 → f64); a bijection of the 2^32 grid, so still uniform.
-#[inline(always)]
-pub(crate) fn unit_from_bits(u: u32) -> f64 {
-    f64::from(u as i32) * (1.0 / 4_294_967_296.0) + 0.5
-}
-
 /// Maps the low 24 bits of `u` onto [0, 1) exactly in `f32`.
 #[inline(always)]
-fn unit24(u: u64) -> f32 {
+pub(crate) fn unit24(u: u64) -> f32 {
     ((u & 0xFF_FFFF) as i32) as f32 * (1.0 / 16_777_216.0)
 }
 
@@ -284,6 +277,22 @@ impl Pso {
         self.refresh_gbest();
     }
 
+    /// Decodes every particle (in pairs) and takes the results in order;
+    /// `true` when the best-so-far improved.
+    fn evaluate_all(&mut self, problem: &Problem) -> bool {
+        let mut improved = false;
+        let particles = self.settings.particles;
+        let mut i = 0;
+        while i + 1 < particles {
+            improved |= self.evaluate_pair(problem, i);
+            i += 2;
+        }
+        if i < particles {
+            improved |= self.evaluate(problem, i);
+        }
+        improved
+    }
+
     fn refresh_gbest(&mut self) {
         let row = self.best_particle * self.stride..(self.best_particle + 1) * self.stride;
         self.gbest[..self.stride].copy_from_slice(&self.pbest[row]);
@@ -423,20 +432,12 @@ impl Solver for Pso {
             warm_eval = problem.evaluate(route);
         }
 
-        // The first decode of each particle is its personal best.
+        // The first decode of each particle is its personal best: against
+        // `WORST`, the evaluation below takes every one.
         self.best_eval = super::WORST;
         self.best_particle = 0;
-        for i in 0..particles {
-            let row = i * stride..(i + 1) * stride;
-            let e = self.decoder.decode(problem, &self.x[row.clone()], &mut self.scratch);
-            self.pbest[row.clone()].copy_from_slice(&self.x[row]);
-            self.pbest_eval[i] = e;
-            if problem.better(&e, &self.best_eval) {
-                self.best = self.scratch;
-                self.best_eval = e;
-                self.best_particle = i;
-            }
-        }
+        self.pbest_eval[..particles].fill(super::WORST);
+        self.evaluate_all(problem);
         if let (Some(route), Some(e)) = (warm, warm_eval)
             && problem.better(&e, &self.best_eval)
         {
@@ -454,17 +455,7 @@ impl Solver for Pso {
     fn step(&mut self, problem: &Problem, _rng: &mut PlannerRng) -> bool {
         let w = self.inertia(self.iteration) as f32;
         update_swarm(self, w);
-        let mut improved = false;
-        let particles = self.settings.particles;
-        let mut i = 0;
-        while i + 1 < particles {
-            improved |= self.evaluate_pair(problem, i);
-            i += 2;
-        }
-        if i < particles {
-            improved |= self.evaluate(problem, i);
-        }
-        if improved {
+        if self.evaluate_all(problem) {
             self.refresh_gbest();
         }
         self.iteration += 1;
@@ -565,11 +556,7 @@ mod tests {
     }
 
     #[test]
-    fn the_bit_to_unit_maps_cover_the_unit_interval() {
-        assert_eq!(unit_from_bits(0x8000_0000), 0.0);
-        assert_eq!(unit_from_bits(0), 0.5);
-        assert!(unit_from_bits(0x7FFF_FFFF) < 1.0);
-        assert!(unit_from_bits(0x7FFF_FFFF) > 0.999_999_99);
+    fn the_bit_to_unit_map_covers_the_unit_interval() {
         assert_eq!(unit24(0), 0.0);
         assert_eq!(unit24(0xFF_FFFF), 1.0 - 1.0 / 16_777_216.0);
         assert_eq!(unit24(0xABFF_FFFF), unit24(0xFF_FFFF));

@@ -1,0 +1,34 @@
+//! The subcommands of the three-process system, ready for the `planner`
+//! command line to mount: `serve`, `mission`, `bench-latency` and the
+//! bench's hidden helper `bench-echo`.
+
+use std::process::ExitCode;
+
+use super::bench::{BenchArgs, EchoArgs, run_bench, run_echo};
+use super::run::{MissionArgs, run_mission};
+use crate::service::cli::{ServeArgs, run_serve};
+
+/// The three-process system's subcommands.
+#[derive(Clone, Debug, clap::Subcommand)]
+pub enum IpcCommand {
+    /// Run a whole mission: sensor-sim and vehicle-sim as child processes,
+    /// the re-planning service here; writes report.json, mission.log, mission.svg.
+    Mission(MissionArgs),
+    /// Run the re-planning service as a process of its own.
+    Serve(ServeArgs),
+    /// Measure trigger → plan latency across processes next to a raw iceoryx2 ping-pong.
+    BenchLatency(BenchArgs),
+    /// (Used by bench-latency) answer raw pings.
+    #[command(hide = true)]
+    BenchEcho(EchoArgs),
+}
+
+/// Runs one of the subcommands.
+pub fn run(cmd: &IpcCommand) -> ExitCode {
+    match cmd {
+        IpcCommand::Mission(a) => run_mission(a),
+        IpcCommand::Serve(a) => run_serve(a),
+        IpcCommand::BenchLatency(a) => run_bench(a),
+        IpcCommand::BenchEcho(a) => run_echo(a),
+    }
+}

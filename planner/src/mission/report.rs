@@ -1,0 +1,175 @@
+//! `report.json` and the human summary of a mission.
+
+use serde_json::{Value, json};
+
+use crate::msg::{AllocCounters, Outcome, REJECT_KINDS, RejectCounters, RejectKind};
+
+/// Everything the report states.
+#[derive(Clone, Debug)]
+pub struct Report {
+    /// How the mission ended.
+    pub outcome: Outcome,
+    /// Mission time used, s.
+    pub time_used_s: f64,
+    /// Budget, s.
+    pub time_available_s: f64,
+    /// Tasks completed.
+    pub tasks_completed: u32,
+    /// Weight collected.
+    pub weight: f64,
+    /// Distance travelled, m.
+    pub distance_m: f64,
+    /// Waypoints visited, in order.
+    pub route: Vec<usize>,
+    /// Plans published.
+    pub plans: u64,
+    /// Plan latency (trigger arrival → plan published), µs: p50, p99, max.
+    pub latency_us: (u64, u64, u64),
+    /// Deadline, ms.
+    pub deadline_ms: f64,
+    /// Plans published after the deadline.
+    pub deadline_misses: u64,
+    /// Solves cut by the deadline.
+    pub deadline_cuts: u64,
+    /// Plans that fell back to the quickest path.
+    pub fallbacks: u64,
+    /// Solver iterations over all plans.
+    pub iterations_total: u64,
+    /// The planner's allocation counters.
+    pub alloc: AllocCounters,
+    /// Whether the planner ran on the counting allocator.
+    pub allocator_installed: bool,
+    /// Snapshots the planner applied.
+    pub sensor_updates: u64,
+    /// Rejected input by kind (planner and vehicle).
+    pub rejected: RejectCounters,
+    /// Plans the vehicle refused.
+    pub plans_rejected_by_vehicle: u32,
+    /// Scenario seed.
+    pub seed: u64,
+    /// Planner seed.
+    pub planner_seed: u64,
+    /// Scenario fingerprint.
+    pub fingerprint: u64,
+    /// Scenario description.
+    pub scenario: String,
+    /// Lockstep or scaled.
+    pub lockstep: bool,
+    /// Mission seconds per real second (scaled mode).
+    pub time_scale: f64,
+    /// Wall time of the run, s.
+    pub wall_time_s: f64,
+    /// Shared-memory and iceoryx2 files of the run left after it.
+    pub shm_files_left: usize,
+}
+
+impl Report {
+    /// Whether the goal was reached.
+    pub fn goal_reached(&self) -> bool {
+        self.outcome == Outcome::GoalReached
+    }
+
+    /// The report as JSON.
+    pub fn to_json(&self) -> Value {
+        let by_kind: serde_json::Map<String, Value> = (0..REJECT_KINDS)
+            .map(|k| (RejectKind::ALL[k].as_str().to_string(), json!(self.rejected.0[k])))
+            .collect();
+        json!({
+            "goal_reached": self.goal_reached(),
+            "outcome": super::log::outcome_name(self.outcome),
+            "time_used_s": self.time_used_s,
+            "time_available_s": self.time_available_s,
+            "tasks_completed": self.tasks_completed,
+            "weight": self.weight,
+            "distance_m": self.distance_m,
+            "route": self.route,
+            "replans": self.plans.saturating_sub(1),
+            "plans": self.plans,
+            "plan_latency_us": {
+                "p50": self.latency_us.0,
+                "p99": self.latency_us.1,
+                "max": self.latency_us.2,
+            },
+            "deadline_ms": self.deadline_ms,
+            "deadline_misses": self.deadline_misses,
+            "deadline_cuts": self.deadline_cuts,
+            "fallback_plans": self.fallbacks,
+            "solver_iterations": {
+                "total": self.iterations_total,
+                "mean_per_plan": self.iterations_total as f64 / self.plans.max(1) as f64,
+            },
+            "steady_state_allocations": self.alloc.sys_allocs_steady,
+            "allocations": {
+                "allocator_installed": self.allocator_installed,
+                "steady_state_measured": self.alloc.steady == 1,
+                "system_allocs_steady": self.alloc.sys_allocs_steady,
+                "system_frees_steady": self.alloc.sys_frees_steady,
+                "system_allocs_total": self.alloc.sys_allocs_total,
+                "pool_allocs_steady": self.alloc.pool_allocs_steady,
+                "pool_high_water": self.alloc.pool_high_water,
+                "pool_capacity": self.alloc.pool_capacity,
+                "pool_misses": self.alloc.pool_misses,
+                "note": "pool blocks are iceoryx2 0.10's 48 B loan state, served from a pool reserved at start-up",
+            },
+            "sensor_updates": self.sensor_updates,
+            "rejected_messages": self.rejected.total(),
+            "rejected_by_kind": by_kind,
+            "plans_rejected_by_vehicle": self.plans_rejected_by_vehicle,
+            "seed": self.seed,
+            "planner_seed": self.planner_seed,
+            "fingerprint": format!("{:016x}", self.fingerprint),
+            "scenario": self.scenario,
+            "lockstep": self.lockstep,
+            "time_scale": if self.lockstep { Value::Null } else { json!(self.time_scale) },
+            "wall_time_s": self.wall_time_s,
+            "shm_files_left": self.shm_files_left,
+        })
+    }
+
+    /// A few lines for people.
+    pub fn summary(&self) -> String {
+        let verdict = match self.outcome {
+            Outcome::GoalReached => "goal reached",
+            Outcome::TimedOut => "OUT OF TIME before the goal",
+            Outcome::Aborted => "stopped before the end",
+            Outcome::Running => "ended without a final state",
+        };
+        format!(
+            "mission: {verdict} — {:.0} of {:.0} s used, {} tasks, weight {:.2}, {:.1} km\n\
+             route: {:?}\n\
+             planner: {} plans ({} re-plans), latency p50 {} µs, p99 {} µs, max {} µs; \
+             {} deadline misses (deadline {} ms), {} cut by the deadline, {} fallbacks\n\
+             allocations in steady state: {} system, {} pool blocks (high water {} of {}); \
+             {} sensor updates; {} rejected messages\n\
+             ({}; {}, wall time {:.1} s)",
+            self.time_used_s,
+            self.time_available_s,
+            self.tasks_completed,
+            self.weight,
+            self.distance_m / 1000.0,
+            self.route,
+            self.plans,
+            self.plans.saturating_sub(1),
+            self.latency_us.0,
+            self.latency_us.1,
+            self.latency_us.2,
+            self.deadline_misses,
+            self.deadline_ms,
+            self.deadline_cuts,
+            self.fallbacks,
+            self.alloc.sys_allocs_steady,
+            self.alloc.pool_allocs_steady,
+            self.alloc.pool_high_water,
+            self.alloc.pool_capacity,
+            self.sensor_updates,
+            self.rejected.total(),
+            self.scenario,
+            if self.lockstep {
+                "lockstep".to_string()
+            } else {
+                format!("{}× real time", self.time_scale)
+            },
+            self.wall_time_s
+        )
+    }
+}

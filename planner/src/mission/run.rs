@@ -1,0 +1,602 @@
+//! `planner mission`: starts sensor-sim and vehicle-sim as child processes,
+//! runs the re-planning service on a thread of its own, shows progress, and
+//! writes `report.json`, `mission.log`, `mission.svg` and a summary.
+//!
+//! Threads: the service thread owns every iceoryx2 port of this process and
+//! is the only one the allocator counts; it hands its events to the main
+//! thread through a fixed-size lock-free queue (no allocation), and the main
+//! thread formats the log, draws the progress bar and watches the children.
+//!
+//! Shutdown: Ctrl-C reaches all three processes (one process group); each
+//! stops its loop and drops its ports. A SIGINT/SIGTERM sent to this process
+//! alone is forwarded to the children. Afterwards the run's iceoryx2 domain
+//! is retired (dead nodes cleaned, the per-domain management segment
+//! removed) and the files it left, if any, are counted in the report.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitCode, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use heapless::spsc::Queue;
+
+use super::log::lines;
+use super::report::Report;
+use super::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
+use crate::msg::{FromCode, Outcome, RejectCounters, VehicleState};
+use crate::plot::{BoundMarker, MapFigure, PlotError, RouteLayer, map_figure};
+use crate::service::alloc;
+use crate::service::cli::{ServeError, ServiceArgs, make_solver, open_ports, prepare_service_thread};
+use crate::service::core::{PlannerCore, ServiceConfig, ServiceCounters, ServiceEvent};
+use crate::service::run::{ExitReason, run_service};
+use crate::transport::ipc::{IpcContext, Shm, cleanup_dead_nodes, domain_config, leftover_files, retire_domain};
+use crate::transport::{IpcOptions, SetupError, WaitMode, signal, unique_prefix};
+
+/// `planner mission` flags.
+#[derive(Clone, Debug, PartialEq, clap::Args)]
+pub struct MissionArgs {
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub service: ServiceArgs,
+    /// As fast as possible and deterministic: the vehicle moves on only after
+    /// the planner answered; solves are never cut (same seeds → same log).
+    #[arg(long)]
+    pub lockstep: bool,
+    /// With --lockstep: cut solves at the deadline anyway (the log is then
+    /// no longer reproducible).
+    #[arg(long, requires = "lockstep")]
+    pub enforce_deadline: bool,
+    /// Mission seconds per real second (without --lockstep).
+    #[arg(long, default_value_t = 1000.0)]
+    pub time_scale: f64,
+    /// Output folder (default: a fresh `mission-<seed>-<time>` folder here).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// iceoryx2 isolation prefix (default: a fresh one per run).
+    #[arg(long, value_name = "PREFIX")]
+    pub ipc_prefix: Option<String>,
+    /// Vehicle namespace in service names.
+    #[arg(long, default_value = "auv1")]
+    pub vehicle: String,
+    /// No progress bar and no summary.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Give up when a peer stays silent this long, real s.
+    #[arg(long, default_value_t = 60.0)]
+    pub answer_timeout_s: f64,
+}
+
+/// Why a mission failed.
+#[derive(Debug, thiserror::Error)]
+pub enum MissionError {
+    /// A flag out of range.
+    #[error("{0}")]
+    Usage(String),
+    /// The world could not be built.
+    #[error(transparent)]
+    World(#[from] WorldError),
+    /// iceoryx2 set-up failed.
+    #[error(transparent)]
+    Setup(#[from] SetupError),
+    /// The service failed.
+    #[error(transparent)]
+    Serve(#[from] ServeError),
+    /// A file could not be written.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// What went wrong.
+        message: String,
+    },
+    /// A child process failed.
+    #[error("{0}")]
+    Child(String),
+    /// The plot failed.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> MissionError {
+    MissionError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+/// Events the queue holds; the main thread drains it every few ms.
+const QUEUE_LEN: usize = 1024;
+
+/// What the service thread shares with the main thread.
+struct Shared {
+    mission_time_bits: AtomicU64,
+    plans: AtomicU64,
+    stop: AtomicBool,
+}
+
+/// What the service thread hands back.
+struct ServiceResult {
+    exit: ExitReason,
+    counters: ServiceCounters,
+    latency_us: (u64, u64, u64),
+    rejected: RejectCounters,
+    last_state: Option<VehicleState>,
+}
+
+fn service_thread(
+    opts: &IpcOptions,
+    fingerprint: u64,
+    cfg: ServiceConfig,
+    events: &mut dyn FnMut(&ServiceEvent),
+    shared: &Shared,
+    rt_priority: Option<i32>,
+) -> Result<ServiceResult, ServeError> {
+    prepare_service_thread(rt_priority)?;
+    let ctx = IpcContext::<Shm>::new(opts, "planner")?;
+    let mut ports = open_ports(&ctx, fingerprint)?;
+    let mut core = PlannerCore::new(cfg, make_solver());
+    let exit = run_service(&mut core, &mut ports, events, &mut |c: &PlannerCore| {
+        shared
+            .mission_time_bits
+            .store(c.mission_time_s().to_bits(), Ordering::Relaxed);
+        shared.plans.store(c.counters().plans, Ordering::Relaxed);
+        !shared.stop.load(Ordering::Relaxed)
+    })?;
+    let h = core.latency_us();
+    Ok(ServiceResult {
+        exit,
+        counters: *core.counters(),
+        latency_us: (h.value_at_quantile(0.5), h.value_at_quantile(0.99), h.max()),
+        rejected: ports.rejected(),
+        last_state: core.last_state().copied(),
+    })
+}
+
+/// A sibling binary of this executable (`sensor-sim`, `vehicle-sim`).
+pub fn sibling_binary(name: &str) -> Result<PathBuf, MissionError> {
+    let exe = std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?;
+    let dir = exe.parent().unwrap_or(Path::new("."));
+    let p = dir.join(name);
+    if p.is_file() {
+        Ok(p)
+    } else {
+        Err(MissionError::Child(format!(
+            "{name} not found next to {} (build the workspace: cargo build --release)",
+            exe.display()
+        )))
+    }
+}
+
+/// A child process and where its stderr goes.
+struct Kid {
+    name: &'static str,
+    child: Option<Child>,
+    log: PathBuf,
+    status: Option<ExitStatus>,
+}
+
+impl Kid {
+    fn spawn(name: &'static str, args: &[String], out: &Path) -> Result<Self, MissionError> {
+        let bin = sibling_binary(name)?;
+        let log = out.join(format!("{name}.log"));
+        let err = File::create(&log).map_err(|e| io_err(&log, e))?;
+        let child = Command::new(&bin)
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(err)
+            .spawn()
+            .map_err(|e| MissionError::Child(format!("cannot start {}: {e}", bin.display())))?;
+        Ok(Self {
+            name,
+            child: Some(child),
+            log,
+            status: None,
+        })
+    }
+
+    /// Whether it has exited (reaps it).
+    fn poll(&mut self) -> bool {
+        if self.status.is_some() {
+            return true;
+        }
+        if let Some(c) = &mut self.child
+            && let Ok(Some(st)) = c.try_wait()
+        {
+            self.status = Some(st);
+            self.child = None;
+        }
+        self.status.is_some()
+    }
+
+    fn signal(&self, sig: i32) {
+        if let Some(c) = &self.child {
+            // SAFETY: a signal to our own child's pid.
+            unsafe { libc::kill(c.id() as libc::pid_t, sig) };
+        }
+    }
+
+    /// Waits up to `t`, then SIGTERM, then SIGKILL.
+    fn finish(&mut self, t: Duration) {
+        let t0 = Instant::now();
+        while !self.poll() && t0.elapsed() < t {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        if !self.poll() {
+            self.signal(libc::SIGTERM);
+            let t1 = Instant::now();
+            while !self.poll() && t1.elapsed() < Duration::from_secs(2) {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+        }
+        if !self.poll()
+            && let Some(c) = &mut self.child
+        {
+            let _ = c.kill();
+            self.status = c.wait().ok();
+            self.child = None;
+        }
+    }
+
+    fn failed(&self) -> Option<String> {
+        let st = self.status?;
+        if st.success() || st.code() == Some(130) {
+            return None;
+        }
+        let tail = std::fs::read_to_string(&self.log).unwrap_or_default();
+        let last = tail.lines().rev().take(3).collect::<Vec<_>>().join(" | ");
+        Some(format!("{} exited with {st}: {last}", self.name))
+    }
+}
+
+impl Drop for Kid {
+    fn drop(&mut self) {
+        if self.child.is_some() {
+            self.finish(Duration::ZERO);
+        }
+    }
+}
+
+fn fresh_out_dir(seed: u64) -> PathBuf {
+    let secs = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let base = format!("mission-{seed}-{secs}");
+    let mut p = PathBuf::from(&base);
+    let mut k = 1;
+    while p.exists() {
+        p = PathBuf::from(format!("{base}-{k}"));
+        k += 1;
+    }
+    p
+}
+
+/// What the main thread collects from the events for the plot.
+#[derive(Default)]
+struct Trace {
+    arrivals: Vec<(f64, f64)>,
+    replans_at: Vec<(f64, f64)>,
+    first_plan: Vec<usize>,
+    last_plan: Vec<usize>,
+    last_epoch: u64,
+}
+
+impl Trace {
+    fn add(&mut self, e: &ServiceEvent) {
+        match *e {
+            ServiceEvent::Arrival { at, .. } => self.arrivals.push(at),
+            ServiceEvent::Plan { route, at, .. } => {
+                if self.first_plan.is_empty() {
+                    self.first_plan = route.to_vec();
+                } else {
+                    self.replans_at.push(at);
+                }
+                self.last_plan = route.to_vec();
+            }
+            ServiceEvent::SensorUpdate { epoch, .. } => self.last_epoch = epoch,
+            ServiceEvent::Finished { .. } => {}
+        }
+    }
+}
+
+fn plot(path: &Path, world: &mut MissionWorld, trace: &Trace, title: &str) -> Result<(), MissionError> {
+    let start = world.snapshot();
+    let start_xy = (start.nodes[start.start].x, start.nodes[start.start].y);
+    if trace.last_epoch > 0 {
+        world.redraw(trace.last_epoch);
+    }
+    let inst = world.snapshot();
+    let w = world.world();
+    let waypoints: Vec<(f64, f64)> = inst.nodes.iter().map(|n| (n.x, n.y)).collect();
+    let bounds: Vec<BoundMarker> = w
+        .dynamic_nodes()
+        .iter()
+        .map(|i| BoundMarker {
+            nominal: (w.nominal_positions()[i].x, w.nominal_positions()[i].y),
+            bound: (w.bounds()[i].x, w.bounds()[i].y),
+        })
+        .collect();
+    let mut travelled = vec![start_xy];
+    travelled.extend(&trace.arrivals);
+    let first: Vec<(f64, f64)> = trace
+        .first_plan
+        .iter()
+        .map(|&i| (start.nodes[i].x, start.nodes[i].y))
+        .collect();
+    let routes = [
+        RouteLayer {
+            label: "first plan",
+            points: &first,
+            dashed: true,
+        },
+        RouteLayer {
+            label: "route travelled",
+            points: &travelled,
+            dashed: false,
+        },
+    ];
+    map_figure(
+        path,
+        &MapFigure {
+            title,
+            map: world.map(),
+            waypoints: &waypoints,
+            start: inst.start,
+            goal: inst.goal,
+            bounds: &bounds,
+            routes: &routes,
+            markers: &trace.replans_at,
+            marker_label: "re-plan",
+        },
+    )?;
+    Ok(())
+}
+
+fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
+    let scale_ok = a.time_scale.is_finite() && a.time_scale > 0.0;
+    if !a.lockstep && !scale_ok {
+        return Err(MissionError::Usage(format!(
+            "--time-scale {}: must be > 0",
+            a.time_scale
+        )));
+    }
+    if !(a.answer_timeout_s.is_finite() && a.answer_timeout_s > 0.0) {
+        return Err(MissionError::Usage(format!(
+            "--answer-timeout-s {}: must be > 0",
+            a.answer_timeout_s
+        )));
+    }
+    let wall = Instant::now();
+    let mut world = load_world(&a.scenario)?;
+    let fingerprint = world.fingerprint();
+    let cfg = a
+        .service
+        .config(fingerprint, a.lockstep && !a.enforce_deadline)
+        .map_err(|e| match e {
+            ServeError::Usage(u) => MissionError::Usage(u),
+            other => MissionError::Serve(other),
+        })?;
+    let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
+    let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
+    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
+    std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
+    signal::install();
+    cleanup_dead_nodes(&domain_config(&prefix)?);
+
+    let mut common = vec![
+        "--ipc-prefix".to_string(),
+        prefix.clone(),
+        "--vehicle".into(),
+        a.vehicle.clone(),
+    ];
+    common.extend(a.scenario.to_flags());
+    let mut vehicle_args = common.clone();
+    if a.lockstep {
+        vehicle_args.push("--lockstep".into());
+    } else {
+        vehicle_args.extend(["--time-scale".into(), a.time_scale.to_string()]);
+    }
+    vehicle_args.extend(["--answer-timeout-s".into(), a.answer_timeout_s.to_string()]);
+    let mut kids = [
+        Kid::spawn("sensor-sim", &common, &out)?,
+        Kid::spawn("vehicle-sim", &vehicle_args, &out)?,
+    ];
+
+    let log_path = out.join("mission.log");
+    let mut log = BufWriter::new(File::create(&log_path).map_err(|e| io_err(&log_path, e))?);
+    let budget = world.snapshot().time_available_s;
+    let bar = if a.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let b = indicatif::ProgressBar::new(budget as u64);
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} s mission time · {msg}")
+        {
+            b.set_style(style.progress_chars("=> "));
+        }
+        b
+    };
+    let shared = Shared {
+        mission_time_bits: AtomicU64::new(0),
+        plans: AtomicU64::new(0),
+        stop: AtomicBool::new(false),
+    };
+    let mut queue: Box<Queue<ServiceEvent, QUEUE_LEN>> = Box::new(Queue::new());
+    let (mut producer, mut consumer) = queue.split();
+    let mut trace = Trace::default();
+    let mut log_error = None;
+    let mut child_error = None;
+
+    let rt_priority = a.service.rt_priority;
+    let result = std::thread::scope(|scope| {
+        let shared = &shared;
+        let opts = &opts;
+        let handle = scope.spawn(move || {
+            let mut events = |e: &ServiceEvent| {
+                // Never drop an event (the log must be complete): wait for room.
+                while producer.enqueue(*e).is_err() {
+                    if shared.stop.load(Ordering::Relaxed) {
+                        return;
+                    }
+                    std::thread::yield_now();
+                }
+            };
+            let r = service_thread(opts, fingerprint, cfg, &mut events, shared, rt_priority);
+            alloc::end_steady_state();
+            r
+        });
+        let mut silent_since: Option<Instant> = None;
+        let mut forwarded = false;
+        loop {
+            let mut drained = 0;
+            while let Some(e) = consumer.dequeue() {
+                drained += 1;
+                trace.add(&e);
+                for line in lines(&e) {
+                    if let Err(err) = writeln!(log, "{line}") {
+                        log_error.get_or_insert_with(|| io_err(&log_path, err));
+                    }
+                }
+            }
+            let t = f64::from_bits(shared.mission_time_bits.load(Ordering::Relaxed));
+            bar.set_position(t.clamp(0.0, budget) as u64);
+            bar.set_message(format!(
+                "{} plans, {} arrivals",
+                shared.plans.load(Ordering::Relaxed),
+                trace.arrivals.len()
+            ));
+            if handle.is_finished() && drained == 0 {
+                break;
+            }
+            if signal::shutdown_requested() && !forwarded {
+                forwarded = true;
+                shared.stop.store(true, Ordering::Relaxed);
+                for k in &kids {
+                    k.signal(signal::received_signal());
+                }
+            }
+            // A child that died early leaves the service waiting: stop it
+            // after a grace period (the vehicle exits at the mission's end).
+            let dead = kids.iter_mut().any(|k| k.poll() && k.failed().is_some());
+            if dead {
+                let since = *silent_since.get_or_insert_with(Instant::now);
+                if since.elapsed() > Duration::from_secs(2) {
+                    shared.stop.store(true, Ordering::Relaxed);
+                    child_error = kids.iter().find_map(|k| k.failed());
+                }
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        handle.join()
+    });
+    bar.finish_and_clear();
+    for k in &mut kids {
+        k.finish(Duration::from_secs(10));
+    }
+    if let Err(e) = log.flush() {
+        log_error.get_or_insert_with(|| io_err(&log_path, e));
+    }
+    let retired = retire_domain(&prefix)?;
+    let left = leftover_files(&prefix);
+    if !retired {
+        eprintln!("planner: iceoryx2 domain {prefix} still has live nodes; not removed");
+    }
+    let service = match result {
+        Ok(r) => r?,
+        Err(_) => return Err(MissionError::Child("the service thread panicked".into())),
+    };
+    if let Some(e) = log_error {
+        return Err(e);
+    }
+    if let Some(e) = child_error.or_else(|| kids.iter().find_map(|k| k.failed())) {
+        return Err(MissionError::Child(e));
+    }
+    let last = service.last_state;
+    let outcome = match (service.exit, last) {
+        (ExitReason::Finished, Some(s)) => Outcome::from_code(s.outcome).unwrap_or(Outcome::Running),
+        _ => Outcome::Aborted,
+    };
+    let (route, tasks, weight, distance, t_used, rejected_by_vehicle) = match last {
+        Some(s) => (
+            crate::msg::route_ids(&s.route, s.route_len)
+                .iter()
+                .map(|&b| b as usize)
+                .collect(),
+            s.tasks_completed,
+            s.weight,
+            s.distance_m,
+            s.header.mission_time_s,
+            s.plans_rejected,
+        ),
+        None => (Vec::new(), 0, 0.0, 0.0, 0.0, 0),
+    };
+    let c = service.counters;
+    let report = Report {
+        outcome,
+        time_used_s: t_used,
+        time_available_s: budget,
+        tasks_completed: tasks,
+        weight,
+        distance_m: distance,
+        route,
+        plans: c.plans,
+        latency_us: service.latency_us,
+        deadline_ms: cfg.deadline.as_secs_f64() * 1000.0,
+        deadline_misses: c.deadline_misses,
+        deadline_cuts: c.deadline_cuts,
+        fallbacks: c.fallbacks,
+        iterations_total: c.iterations_total,
+        alloc: alloc::counters(),
+        allocator_installed: alloc::installed(),
+        sensor_updates: c.sensor_updates,
+        rejected: service.rejected,
+        plans_rejected_by_vehicle: rejected_by_vehicle,
+        seed: a.scenario.seed,
+        planner_seed: a.service.planner_seed,
+        fingerprint,
+        scenario: world.describe(),
+        lockstep: a.lockstep,
+        time_scale: a.time_scale,
+        wall_time_s: wall.elapsed().as_secs_f64(),
+        shm_files_left: left.len(),
+    };
+    let report_path = out.join("report.json");
+    let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
+    std::fs::write(&report_path, text + "\n").map_err(|e| io_err(&report_path, e))?;
+    let title = format!(
+        "Mission, seed {}: {}",
+        a.scenario.seed,
+        super::log::outcome_name(outcome)
+    );
+    plot(&out.join("mission.svg"), &mut world, &trace, &title)?;
+    Ok((report, out))
+}
+
+/// Runs `planner mission`: 0 when the mission ran to its end (goal or time
+/// out: see the report), 1 on an error, 2 on bad arguments, 130 when stopped.
+pub fn run_mission(a: &MissionArgs) -> ExitCode {
+    match mission(a) {
+        Ok((report, out)) => {
+            if !a.quiet {
+                println!("{}", report.summary());
+                println!("wrote {}/report.json, mission.log, mission.svg", out.display());
+            }
+            if report.outcome == Outcome::Aborted {
+                ExitCode::from(130)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Err(e @ MissionError::Usage(_)) => {
+            eprintln!("planner: error: {e}");
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("planner: error: mission: {e}");
+            ExitCode::from(1)
+        }
+    }
+}

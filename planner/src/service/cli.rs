@@ -1,0 +1,199 @@
+//! `planner serve`: the re-planning service as a process of its own (the
+//! mission runs the same loop in-process; the latency bench starts this).
+
+use std::process::ExitCode;
+use std::time::Duration;
+
+use super::alloc;
+use super::core::{PlannerCore, ServiceConfig, ServiceEvent};
+use super::run::{ExitReason, PlannerPorts, run_service};
+use crate::mission::world::{ScenarioArgs, WorldError, load_world};
+use crate::msg::{Plan, PlannerStatus, VehicleState, WaypointSnapshot};
+use crate::solver::Solver;
+use crate::solver::pso::{Pso, PsoSettings};
+use crate::transport::guard::Guarded;
+use crate::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
+use crate::transport::{IpcArgs, Role, SetupError, TransportError, signal};
+
+/// Flags of the planning service (shared by `serve` and `mission`).
+#[derive(Clone, Debug, PartialEq, clap::Args)]
+pub struct ServiceArgs {
+    /// Trigger → plan-published deadline, ms.
+    #[arg(long, default_value_t = 20.0)]
+    pub deadline_ms: f64,
+    /// Solver iterations per re-plan (cut at the deadline).
+    #[arg(long, default_value_t = 150)]
+    pub iterations: u32,
+    /// Re-plan on a sensor update when the plan's remaining time moves by more than this, s.
+    #[arg(long, default_value_t = 120.0)]
+    pub replan_threshold_s: f64,
+    /// Seed of the planner's random draws.
+    #[arg(long, default_value_t = 1)]
+    pub planner_seed: u64,
+    /// Run the service thread under SCHED_FIFO with this priority (1..=99),
+    /// so other work on the machine cannot preempt a solve past its
+    /// deadline (needs CAP_SYS_NICE or root).
+    #[arg(long, value_name = "PRIO")]
+    pub rt_priority: Option<i32>,
+}
+
+/// `planner serve` flags.
+#[derive(Clone, Debug, PartialEq, clap::Args)]
+pub struct ServeArgs {
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub ipc: IpcArgs,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub service: ServiceArgs,
+    /// Deterministic solves: run every iteration, never cut at the deadline
+    /// (latency is still measured and misses counted).
+    #[arg(long)]
+    pub lockstep: bool,
+}
+
+/// Why the service could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    /// A flag out of range.
+    #[error("{0}")]
+    Usage(String),
+    /// The world could not be built.
+    #[error(transparent)]
+    World(#[from] WorldError),
+    /// iceoryx2 set-up failed.
+    #[error(transparent)]
+    Setup(#[from] SetupError),
+    /// The transport failed while running.
+    #[error("transport: {0}")]
+    Transport(#[from] TransportError),
+}
+
+impl ServiceArgs {
+    /// The service configuration these flags describe.
+    pub fn config(&self, fingerprint: u64, lockstep: bool) -> Result<ServiceConfig, ServeError> {
+        if !(self.deadline_ms.is_finite() && self.deadline_ms > 1.0 && self.deadline_ms <= 60_000.0) {
+            return Err(ServeError::Usage(format!(
+                "--deadline-ms {}: must be between 1 and 60000",
+                self.deadline_ms
+            )));
+        }
+        if !(self.replan_threshold_s.is_finite() && self.replan_threshold_s >= 0.0) {
+            return Err(ServeError::Usage(format!(
+                "--replan-threshold-s {}: must be >= 0",
+                self.replan_threshold_s
+            )));
+        }
+        Ok(ServiceConfig {
+            deadline: Duration::from_secs_f64(self.deadline_ms / 1000.0),
+            iterations: self.iterations,
+            replan_threshold_s: self.replan_threshold_s,
+            cut_at_deadline: !lockstep,
+            seed: self.planner_seed,
+            fingerprint,
+            ..ServiceConfig::default()
+        })
+    }
+}
+
+/// The solver the service runs: the paper's PSO (150 particles; the
+/// iteration budget comes from the service configuration, default 150).
+pub fn make_solver() -> Box<dyn Solver> {
+    Box::new(Pso::new(PsoSettings::paper()))
+}
+
+/// The planner's ports on shared memory.
+pub type ShmPlannerPorts = PlannerPorts<
+    IpcWaker<Shm>,
+    IpcInbox<Shm, VehicleState>,
+    IpcInbox<Shm, WaypointSnapshot>,
+    IpcOutbox<Shm, Plan>,
+    IpcOutbox<Shm, PlannerStatus>,
+>;
+
+/// Opens the planner's ports in the context's domain.
+pub fn open_ports(ctx: &IpcContext<Shm>, fingerprint: u64) -> Result<ShmPlannerPorts, SetupError> {
+    let stamp = Stamp::new(fingerprint);
+    Ok(PlannerPorts {
+        waker: ctx.waker(Role::Planner)?,
+        states: Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "planner"),
+        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "planner"),
+        plans: ctx.outbox::<Plan>(stamp)?,
+        status: ctx.outbox::<PlannerStatus>(stamp)?,
+    })
+}
+
+/// Prepares the calling thread as the service thread: counted by the
+/// allocator and served from its pool, and with `rt_priority`, scheduled
+/// SCHED_FIFO at that priority.
+pub fn prepare_service_thread(rt_priority: Option<i32>) -> Result<(), ServeError> {
+    alloc::watch_this_thread();
+    alloc::reserve_pool();
+    if let Some(prio) = rt_priority {
+        if !(1..=99).contains(&prio) {
+            return Err(ServeError::Usage(format!(
+                "--rt-priority {prio}: must be between 1 and 99"
+            )));
+        }
+        let param = libc::sched_param { sched_priority: prio };
+        // SAFETY: pthread_self() is this thread; `param` is a valid sched_param.
+        let rc = unsafe { libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &param) };
+        if rc != 0 {
+            return Err(ServeError::Usage(format!(
+                "--rt-priority {prio}: SCHED_FIFO refused ({}); it needs CAP_SYS_NICE or root",
+                std::io::Error::from_raw_os_error(rc)
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
+    signal::install();
+    let world = load_world(&args.scenario)?;
+    let fingerprint = world.fingerprint();
+    drop(world);
+    let cfg = args.service.config(fingerprint, args.lockstep)?;
+    let opts = args.ipc.options()?;
+    prepare_service_thread(args.service.rt_priority)?;
+    let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
+    let mut ports = open_ports(&ctx, fingerprint)?;
+    let mut core = PlannerCore::new(cfg, make_solver());
+    let exit = run_service(&mut core, &mut ports, &mut |_: &ServiceEvent| {}, &mut |_| true)?;
+    let c = core.counters();
+    let a = alloc::counters();
+    let h = core.latency_us();
+    eprintln!(
+        "planner: {} plans, latency p50 {} µs p99 {} µs max {} µs, {} deadline misses, \
+         steady-state system allocations {} (pool blocks {}, pool high water {})",
+        c.plans,
+        h.value_at_quantile(0.5),
+        h.value_at_quantile(0.99),
+        h.max(),
+        c.deadline_misses,
+        a.sys_allocs_steady,
+        a.pool_allocs_steady,
+        a.pool_high_water
+    );
+    Ok(exit)
+}
+
+/// Runs `planner serve`; the exit code follows the binaries' convention
+/// (0 done, 1 error, 2 bad arguments, 130 signal).
+pub fn run_serve(args: &ServeArgs) -> ExitCode {
+    match serve(args) {
+        Ok(ExitReason::Shutdown) => ExitCode::from(130),
+        Ok(_) => ExitCode::SUCCESS,
+        Err(e @ ServeError::Usage(_)) => {
+            eprintln!("planner: error: {e}");
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("planner: error: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
