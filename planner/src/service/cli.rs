@@ -27,6 +27,9 @@ pub struct ServiceArgs {
     /// Re-plan on a sensor update when the plan's remaining time moves by more than this, s.
     #[arg(long, default_value_t = 120.0)]
     pub replan_threshold_s: f64,
+    /// Time held back from every plan's budget against drifting waypoints, s.
+    #[arg(long, default_value_t = super::core::DEFAULT_RESERVE_S)]
+    pub reserve_s: f64,
     /// Seed of the planner's random draws.
     #[arg(long, default_value_t = 1)]
     pub planner_seed: u64,
@@ -87,8 +90,15 @@ impl ServiceArgs {
                 self.replan_threshold_s
             )));
         }
+        if !(self.reserve_s.is_finite() && self.reserve_s >= 0.0) {
+            return Err(ServeError::Usage(format!(
+                "--reserve-s {}: must be >= 0",
+                self.reserve_s
+            )));
+        }
         Ok(ServiceConfig {
             deadline: Duration::from_secs_f64(self.deadline_ms / 1000.0),
+            reserve_s: self.reserve_s,
             iterations: self.iterations,
             replan_threshold_s: self.replan_threshold_s,
             cut_at_deadline: !lockstep,

@@ -51,6 +51,10 @@ pub struct ServiceConfig {
     pub replan_threshold_s: f64,
     /// Cut solves at the deadline (off in lockstep for determinism).
     pub cut_at_deadline: bool,
+    /// Time held back from every plan's budget, s, against dynamic
+    /// waypoints drifting while the vehicle is committed to an edge (a plan
+    /// that uses the budget to the second cannot absorb a longer edge).
+    pub reserve_s: f64,
     /// Seed of the planner's random draws.
     pub seed: u64,
     /// Scenario fingerprint of this process.
@@ -60,6 +64,11 @@ pub struct ServiceConfig {
     pub warmup_plans: u64,
 }
 
+/// Default planning reserve, s (our choice, measured: lockstep missions on
+/// the default scenario, seeds 1–26, reached the goal 25 times with 300 s
+/// against 23 with none, at about the same weight; 900 s was no safer).
+pub const DEFAULT_RESERVE_S: f64 = 300.0;
+
 impl Default for ServiceConfig {
     fn default() -> Self {
         Self {
@@ -68,6 +77,7 @@ impl Default for ServiceConfig {
             iterations: 150,
             replan_threshold_s: 120.0,
             cut_at_deadline: true,
+            reserve_s: DEFAULT_RESERVE_S,
             seed: 1,
             fingerprint: 0,
             warmup_plans: 1,
@@ -437,7 +447,7 @@ impl PlannerCore {
         let mut excluded = v.visited;
         excluded.remove(start);
         // A budget must be > 0; an exhausted one plans the quickest path.
-        let budget = (v.time_left_s - v.eta_free_s).max(1e-3);
+        let budget = (v.time_left_s - v.eta_free_s - self.config().reserve_s).max(1e-3);
         (start, budget, excluded)
     }
 
@@ -729,6 +739,26 @@ mod tests {
         assert_eq!(r.route.last(), Some(inst.goal));
         assert!(r.eval.feasible);
         assert!(!c.has_pending());
+    }
+
+    #[test]
+    fn plans_hold_the_reserve_back_from_the_time_left() {
+        let inst = random_instance(20, 0.35, 20_000.0, 7);
+        for reserve_s in [0.0, 1_500.0] {
+            let cfg = ServiceConfig {
+                cut_at_deadline: false,
+                iterations: 20,
+                reserve_s,
+                ..ServiceConfig::default()
+            };
+            let mut c = PlannerCore::new(cfg, Box::new(RandomKeySearch::new(10)));
+            let mut sink = |_: &ServiceEvent| {};
+            c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
+            c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
+            let r = c.replan().unwrap().unwrap();
+            assert_eq!(r.budget_s, 20_000.0 - reserve_s);
+            assert!(r.eval.time_s <= 20_000.0 - reserve_s);
+        }
     }
 
     #[test]
