@@ -9,6 +9,7 @@
 //! stopped (house style §1). Solvers know nothing of transport or files.
 
 pub mod bbo;
+pub mod exact;
 pub mod pso;
 
 use std::time::{Duration, Instant};
