@@ -10,6 +10,7 @@
 
 pub mod bbo;
 pub mod exact;
+pub mod local;
 pub mod pso;
 
 use std::time::{Duration, Instant};
