@@ -14,6 +14,8 @@ use super::polish::polish;
 /// whose nodes lie in `allowed`.
 #[derive(Clone, Default)]
 pub(super) struct Level {
+    /// Which split of edge values the hulls use.
+    pub(super) split: usize,
     /// Interior classes' segments, best slope first.
     pub(super) segs: Vec<Seg>,
     /// Per class: the neighbours its hull vertices use (a rebuild is needed
@@ -25,6 +27,44 @@ pub(super) struct Level {
     pub(super) goal_base: Item,
     pub(super) goal_segs: Vec<Seg>,
     pub(super) goal_nb: NodeSet,
+}
+
+/// The half-edges of every node under one split of edge values between
+/// their ends (time/2, the end's share of the value, the neighbour), sorted
+/// by [`sort_items`] so that every hull is built by a sweep.
+pub(super) struct Split {
+    /// Node `v`'s half-edges are `halves[at[v]..at[v + 1]]`.
+    pub(super) halves: Vec<Item>,
+    pub(super) at: Vec<usize>,
+}
+
+impl Split {
+    /// Builds the lists from `half[v·n + a]`, the share of edge v–a at v.
+    pub(super) fn new(p: &Problem, half: &[f64]) -> Self {
+        let n = p.n();
+        let mut halves = Vec::new();
+        let mut at = vec![0];
+        for v in 0..n {
+            let first = halves.len();
+            for a in p.neighbours(v).iter() {
+                halves.push(Item {
+                    t: 0.5 * p.time_s(v, a),
+                    v: half[v * n + a],
+                    a: a as u8,
+                    b: a as u8,
+                });
+            }
+            sort_items(&mut halves[first..]);
+            at.push(halves.len());
+        }
+        Self { halves, at }
+    }
+
+    /// The half-edges at `v`.
+    #[inline]
+    pub(super) fn of(&self, v: usize) -> &[Item] {
+        &self.halves[self.at[v]..self.at[v + 1]]
+    }
 }
 
 /// Reusable buffers of the bound computation.
@@ -55,9 +95,9 @@ pub(super) struct Search<'p> {
     pub(super) node_val: Vec<f64>,
     /// All-pairs shortest times, row-major n×n.
     pub(super) sp: Vec<f64>,
-    /// Half-edges of every node, node `v`'s at `halves_at[v]..halves_at[v + 1]`.
-    pub(super) halves: Vec<Item>,
-    pub(super) halves_at: Vec<usize>,
+    /// Ways of splitting edge values between their ends; the bound is the
+    /// smallest over them.
+    pub(super) splits: Vec<Split>,
     /// Values are integers: bounds may be rounded down.
     pub(super) integral: bool,
     /// paper_cost: φ1 · T_available (0 for max_weight).
@@ -70,7 +110,8 @@ pub(super) struct Search<'p> {
     pub(super) have_best: bool,
     pub(super) nodes: u64,
     pub(super) children: Vec<Vec<Child>>,
-    pub(super) levels: Vec<Level>,
+    /// Per depth, one [`Level`] per split.
+    pub(super) levels: Vec<Vec<Level>>,
     pub(super) scratch: Scratch,
     pub(super) memo: Memo,
     pub(super) deadline: Option<Instant>,
@@ -159,12 +200,6 @@ impl<'p> Search<'p> {
         out
     }
 
-    /// The half-edges at `v` (time/2, value/2, neighbour), sorted by [`sort_items`].
-    #[inline]
-    pub(super) fn halves(&self, v: usize) -> &[Item] {
-        &self.halves[self.halves_at[v]..self.halves_at[v + 1]]
-    }
-
     /// Rebuilds interior class `v` over half-edge pairs to `allowed` nodes;
     /// appends its segments to `out` and returns the neighbours it uses.
     ///
@@ -173,10 +208,17 @@ impl<'p> Search<'p> {
     /// more time and give no less value is never needed for that, so only the
     /// half-edges that beat the second-best value seen so far in time order
     /// are paired (typically a handful instead of all neighbours).
-    pub(super) fn build_class(&self, v: usize, allowed: NodeSet, sc: &mut Scratch, out: &mut Vec<Seg>) -> NodeSet {
+    pub(super) fn build_class(
+        &self,
+        k: usize,
+        v: usize,
+        allowed: NodeSet,
+        sc: &mut Scratch,
+        out: &mut Vec<Seg>,
+    ) -> NodeSet {
         sc.stack.clear();
         let (mut best1, mut best2) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-        for &h in self.halves(v) {
+        for &h in self.splits[k].of(v) {
             if !allowed.contains(h.a as usize) || h.v <= best2 {
                 continue;
             }
@@ -221,13 +263,14 @@ impl<'p> Search<'p> {
     #[inline]
     pub(super) fn singles(
         &self,
+        k: usize,
         v: usize,
         allowed: NodeSet,
         sc: &mut Scratch,
         reach: impl Fn(usize, f64) -> bool,
     ) -> Option<Item> {
         sc.items.clear();
-        for &h in self.halves(v) {
+        for &h in self.splits[k].of(v) {
             if allowed.contains(h.a as usize) && reach(h.a as usize, h.t) {
                 sc.items.push(h);
             }
@@ -237,10 +280,11 @@ impl<'p> Search<'p> {
 
     /// Rebuilds the goal class over half-edges to `allowed` nodes.
     pub(super) fn build_goal(&self, allowed: NodeSet, sc: &mut Scratch, lvl: &mut Level) {
+        let k = lvl.split;
         let g = self.goal;
         lvl.goal_segs.clear();
         let mut stack = std::mem::take(&mut sc.stack);
-        match self.singles(g, allowed, sc, |_, _| true) {
+        match self.singles(k, g, allowed, sc, |_, _| true) {
             Some(base) => {
                 lvl.goal_nb = hull_segments(&sc.items, base, g as u8, &mut stack, &mut lvl.goal_segs);
                 lvl.goal_base = base;
@@ -261,19 +305,21 @@ impl<'p> Search<'p> {
     /// for them and `goal_allowed` for the goal.
     pub(super) fn fresh_level(
         &self,
+        k: usize,
         classes: NodeSet,
         allowed: NodeSet,
         goal_allowed: NodeSet,
         sc: &mut Scratch,
     ) -> Level {
         let mut lvl = Level {
+            split: k,
             hull_nb: vec![NodeSet::EMPTY; self.n],
             allowed,
             ..Level::default()
         };
         let mut segs = Vec::new();
         for v in classes.iter() {
-            lvl.hull_nb[v] = self.build_class(v, allowed, sc, &mut segs);
+            lvl.hull_nb[v] = self.build_class(k, v, allowed, sc, &mut segs);
         }
         sort_segs(&mut segs);
         lvl.segs = segs;
@@ -287,6 +333,8 @@ impl<'p> Search<'p> {
     pub(super) fn derive_level(&self, parent: &Level, avail: NodeSet, child: &mut Level, sc: &mut Scratch) {
         let allowed = NodeSet(avail.0 | (1u128 << self.goal));
         let gone = parent.allowed.0 & !allowed.0;
+        let k = parent.split;
+        child.split = k;
         child.allowed = allowed;
         child.hull_nb.clear();
         child.hull_nb.extend_from_slice(&parent.hull_nb);
@@ -304,7 +352,7 @@ impl<'p> Search<'p> {
         if !stale.is_empty() {
             let mut segs = std::mem::take(&mut child.segs);
             for v in stale.iter() {
-                child.hull_nb[v] = self.build_class(v, allowed, sc, &mut segs);
+                child.hull_nb[v] = self.build_class(k, v, allowed, sc, &mut segs);
             }
             sort_segs(&mut segs);
             child.segs = segs;
@@ -319,17 +367,34 @@ impl<'p> Search<'p> {
         }
     }
 
+    /// The smallest bound over the splits (see [`Search::bound_one`]); stops
+    /// early once one falls below the incumbent's target, which is all the
+    /// caller needs to know then.
+    pub(super) fn bound(&self, lvls: &[Level], sc: &mut Scratch, u: usize, v0: f64, rem: f64, avail: NodeSet) -> f64 {
+        let target = self.target();
+        let mut ub = f64::INFINITY;
+        for lvl in lvls {
+            ub = ub.min(self.bound_one(lvl, sc, u, v0, rem, avail));
+            if ub < target {
+                break;
+            }
+        }
+        ub
+    }
+
     /// Upper bound on the final surrogate value of any completion of a path
     /// that stands at `u` with value `v0` and `rem` seconds left, using
     /// interior nodes of `avail` only (all of which `lvl` covers).
-    pub(super) fn bound(&self, lvl: &Level, sc: &mut Scratch, u: usize, v0: f64, rem: f64, avail: NodeSet) -> f64 {
+    pub(super) fn bound_one(&self, lvl: &Level, sc: &mut Scratch, u: usize, v0: f64, rem: f64, avail: NodeSet) -> f64 {
         if !lvl.goal_base.t.is_finite() {
             return f64::NEG_INFINITY;
         }
         // The current node's class: exactly one half-edge, to an available
         // node or to the goal, from which the goal is still reachable in time.
         let targets = NodeSet(avail.0 | (1u128 << self.goal));
-        let Some(base) = self.singles(u, targets, sc, |a, half_t| 2.0 * half_t + self.p.to_goal_s(a) <= rem) else {
+        let Some(base) = self.singles(lvl.split, u, targets, sc, |a, half_t| {
+            2.0 * half_t + self.p.to_goal_s(a) <= rem
+        }) else {
             return f64::NEG_INFINITY;
         };
         let mut cap = rem - base.t - lvl.goal_base.t;
@@ -414,15 +479,15 @@ impl<'p> Search<'p> {
 
     pub(super) fn tick(&mut self) -> bool {
         self.nodes += 1;
-        if self.nodes >= self.node_limit {
-            self.aborted = true;
-        } else if self.nodes & 255 == 0
-            && let Some(d) = self.deadline
-            && Instant::now() >= d
-        {
+        if self.nodes >= self.node_limit || (self.nodes & 255 == 1 && self.past_deadline()) {
             self.aborted = true;
         }
         self.aborted
+    }
+
+    /// Whether the time limit has passed (the clock is read only here).
+    pub(super) fn past_deadline(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 
     /// Expands the path in `self.route`, which ends at `u` after `t` seconds
@@ -434,12 +499,15 @@ impl<'p> Search<'p> {
             self.open_bound = self.open_bound.max(ub);
             return;
         }
+        let k_splits = self.splits.len();
         if self.levels.len() < depth + 2 {
-            self.levels.resize_with(depth + 2, Level::default);
+            self.levels.resize_with(depth + 2, || vec![Level::default(); k_splits]);
         }
         let mut sc = std::mem::take(&mut self.scratch);
         let mut lvl = std::mem::take(&mut self.levels[depth + 1]);
-        self.derive_level(&self.levels[depth], avail, &mut lvl, &mut sc);
+        for (child, parent) in lvl.iter_mut().zip(&self.levels[depth]) {
+            self.derive_level(parent, avail, child, &mut sc);
+        }
         let mut kids = std::mem::take(&mut self.children[depth]);
         kids.clear();
         let cands = NodeSet(self.p.neighbours(u).0 & (avail.0 | (1u128 << self.goal)));

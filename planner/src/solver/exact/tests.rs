@@ -89,35 +89,43 @@ fn matches_brute_force_on_small_random_graphs_in_both_objectives() {
             continue; // goal not connected to the start in this draw
         };
         let brute = brute_force(&p);
-        let out = solve_exact(&p, &ExactSettings::default());
-        match (brute, out) {
-            (None, Err(ExactError::NoFeasibleRoute { .. })) => {}
-            (Some((br, be)), Ok(o)) => {
-                assert!(o.proved_optimal, "{}: not proved", inst.name);
-                assert!(
-                    !p.better(&be, &o.eval) && !p.better(&o.eval, &be),
-                    "{}: exact {:?} {:?} vs brute force {:?} {:?}",
-                    inst.name,
-                    o.route,
-                    o.eval,
-                    br,
-                    be
-                );
-                assert_eq!(o.gap, 0.0);
-                assert_eq!(o.bound, value(&p, &o.eval));
-                // The reported figures are the checker's figures.
-                let stats = RouteStats::from_instance(&inst, &o.route.to_vec()).unwrap();
-                assert!(stats.feasible);
-                assert_eq!(stats.weight, o.eval.weight);
-                checked[matches!(p.objective(), Objective::MaxWeight) as usize] += 1;
-                partial += usize::from(br.len() < p.n());
+        // Every combination of the optional parts must find the same optimum.
+        for (tune_split, beam) in [(true, true), (false, false), (true, false)] {
+            let settings = ExactSettings {
+                tune_split,
+                beam,
+                ..ExactSettings::default()
+            };
+            let out = solve_exact(&p, &settings);
+            match (brute, out) {
+                (None, Err(ExactError::NoFeasibleRoute { .. })) => {}
+                (Some((br, be)), Ok(o)) => {
+                    assert!(o.proved_optimal, "{}: not proved", inst.name);
+                    assert!(
+                        !p.better(&be, &o.eval) && !p.better(&o.eval, &be),
+                        "{}: exact {:?} {:?} vs brute force {:?} {:?}",
+                        inst.name,
+                        o.route,
+                        o.eval,
+                        br,
+                        be
+                    );
+                    assert_eq!(o.gap, 0.0);
+                    assert_eq!(o.bound, value(&p, &o.eval));
+                    // The reported figures are the checker's figures.
+                    let stats = RouteStats::from_instance(&inst, &o.route.to_vec()).unwrap();
+                    assert!(stats.feasible);
+                    assert_eq!(stats.weight, o.eval.weight);
+                    checked[matches!(p.objective(), Objective::MaxWeight) as usize] += 1;
+                    partial += usize::from(br.len() < p.n());
+                }
+                (b, o) => panic!("{}: brute force {b:?}, exact {o:?}", inst.name),
             }
-            (b, o) => panic!("{}: brute force {b:?}, exact {o:?}", inst.name),
         }
     }
     // Both objectives were really exercised.
     assert!(
-        checked[0] >= 30 && checked[1] >= 30 && partial >= 30,
+        checked[0] >= 90 && checked[1] >= 90 && partial >= 90,
         "{checked:?} {partial}"
     );
 }
@@ -264,23 +272,27 @@ fn proves_the_known_optima_of_small_classic_instances() {
 
 #[test]
 fn a_stopped_40_node_search_reports_a_bound_above_the_optimum() {
-    let inst = random_instance(40, 0.3, 31_000.0, 1);
+    let inst = random_instance(40, 0.6, 31_000.0, 2);
     let p = Problem::from_instance(&inst).unwrap();
     let full = solve_exact(&p, &ExactSettings::default()).unwrap();
     assert!(full.proved_optimal && full.gap == 0.0);
     assert!(full.eval.tasks >= 5, "a paper-like route: {:?}", full.route);
+    assert!(full.root_bound >= full.eval.weight);
+    // The limits below must really cut the search short.
+    assert!(full.nodes_explored > 600, "{}", full.nodes_explored);
+    let limited = |node_limit, time_limit| ExactSettings {
+        node_limit,
+        time_limit,
+        ..ExactSettings::default()
+    };
     for settings in [
-        ExactSettings {
-            node_limit: Some(30),
-            ..ExactSettings::default()
-        },
-        ExactSettings {
-            time_limit: Some(Duration::ZERO),
-            ..ExactSettings::default()
-        },
+        limited(Some(1), None),
+        limited(Some(40), None),
+        limited(Some(500), None),
+        limited(None, Some(Duration::ZERO)),
     ] {
         let o = solve_exact(&p, &settings).unwrap();
-        assert!(!o.proved_optimal);
+        assert!(!o.proved_optimal, "{settings:?}");
         assert!(o.eval.feasible && p.evaluate(&o.route) == Some(o.eval));
         assert!(o.bound >= full.eval.weight, "{o:?} vs optimum {}", full.eval.weight);
         assert!(full.eval.weight >= o.eval.weight);
