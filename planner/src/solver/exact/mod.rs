@@ -27,13 +27,13 @@
 //!   used drops out.
 //! - Two splits of edge values are used and the smaller bound is taken: the
 //!   even one, and one tuned at the root by Lagrangian subgradient steps
-//!   ([`lagrange`]), which is much tighter at the root but was tuned there.
+//!   (`lagrange.rs`), which is much tighter at the root but was tuned there.
 //! - Dominance: two partial paths at the same node with the same visited set
 //!   are compared; the one with less time and no less value wins (a lossy
 //!   fixed-size table remembers the states seen).
 //! - Incumbents: the quickest route, an optional warm start, then a
-//!   bound-guided beam search ([`beam`]) before the proof; every new
-//!   incumbent is polished by local search ([`polish`]).
+//!   bound-guided beam search (`beam.rs`) before the proof; every new
+//!   incumbent is polished by local search (`polish.rs`).
 //!
 //! Objectives are searched through one surrogate value V summed along the
 //! route: the weight for `max_weight`, and φ1·T_e − φ2·ξ/ρ for `paper_cost`
