@@ -55,7 +55,7 @@ fn small_instances() -> Vec<Instance> {
         Objective::PaperCost { phi1: 0.0, phi2: 1.0 },
     ];
     let mut seed = 0;
-    for n in (4..=9).chain(7..=9) {
+    for n in (2..=9).chain(7..=9) {
         for &density in &[0.4, 0.7, 1.0] {
             for &budget in &[9_000.0, 16_000.0, 30_000.0] {
                 seed += 1;
