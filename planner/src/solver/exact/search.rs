@@ -102,6 +102,8 @@ pub(super) struct Search<'p> {
     pub(super) integral: bool,
     /// paper_cost: φ1 · T_available (0 for max_weight).
     pub(super) cost_offset: f64,
+    /// Prove the smallest time among routes of the best value too.
+    pub(super) break_ties: bool,
     /// Extra value a stored state needs to dominate (see [`Memo`]).
     pub(super) dom_margin: f64,
     pub(super) route: Route,
@@ -455,11 +457,11 @@ impl<'p> Search<'p> {
 
     /// Whether a subproblem with bound `ub` and route-time lower bound `t_lb`
     /// may still hold a route better than the incumbent (ties on the
-    /// objective go to the smaller time).
+    /// objective go to the smaller time, unless `break_ties` is off).
     #[inline]
     pub(super) fn promising(&self, ub: f64, t_lb: f64) -> bool {
         let target = self.target();
-        ub > target || (ub >= target && t_lb < self.best_eval.time_s)
+        ub > target || (self.break_ties && ub >= target && t_lb < self.best_eval.time_s)
     }
 
     /// Offers the route in `self.route` (which ends at the goal) as the
