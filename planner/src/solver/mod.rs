@@ -20,6 +20,7 @@
 
 pub mod auto;
 pub mod bbo;
+pub mod exact;
 mod lanes;
 pub mod local;
 pub mod pso;
