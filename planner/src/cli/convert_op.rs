@@ -77,7 +77,7 @@ fn convert_tree(root: &Path, out_root: &Path) -> Result<(), CliError> {
         )));
     }
     let mut files = Vec::new();
-    collect_txt(root, &mut files)?;
+    super::collect_files(root, &["txt"], &mut files)?;
     if files.is_empty() {
         return Err(CliError::Usage(format!(
             "no .txt benchmark files under {}",
@@ -102,28 +102,4 @@ fn convert_tree(root: &Path, out_root: &Path) -> Result<(), CliError> {
         root.display(),
         out_root.display()
     ))
-}
-
-/// Every `.txt` file under `dir`, sorted, so runs are reproducible.
-fn collect_txt(dir: &Path, files: &mut Vec<PathBuf>) -> Result<(), CliError> {
-    let read_err = |source| CliError::Read {
-        path: dir.to_path_buf(),
-        source,
-    };
-    let mut entries = std::fs::read_dir(dir)
-        .map_err(read_err)?
-        .map(|e| e.map(|e| e.path()))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(read_err)?;
-    entries.sort();
-    for path in entries {
-        // Symlinked folders are not followed (no cycles); symlinked files are read.
-        let is_dir = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir());
-        if is_dir {
-            collect_txt(&path, files)?;
-        } else if path.extension().is_some_and(|e| e == "txt") && path.is_file() {
-            files.push(path);
-        }
-    }
-    Ok(())
 }

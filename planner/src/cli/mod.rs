@@ -157,6 +157,31 @@ pub fn print(text: &str) -> Result<(), CliError> {
     }
 }
 
+/// Every file under `dir` (recursively) whose extension is one of
+/// `extensions`, in sorted order so runs are reproducible. Symlinked folders
+/// are not followed (no cycles); symlinked files are read.
+pub fn collect_files(dir: &Path, extensions: &[&str], files: &mut Vec<PathBuf>) -> Result<(), CliError> {
+    let read_err = |source| CliError::Read {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut entries = std::fs::read_dir(dir)
+        .map_err(read_err)?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(read_err)?;
+    entries.sort();
+    for path in entries {
+        let is_dir = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir());
+        if is_dir {
+            collect_files(&path, extensions, files)?;
+        } else if path.extension().is_some_and(|e| extensions.iter().any(|x| e == *x)) && path.is_file() {
+            files.push(path);
+        }
+    }
+    Ok(())
+}
+
 /// Reads and validates an `auv-route-instance/1` file.
 pub fn load_instance(path: &Path) -> Result<Instance, CliError> {
     let text = read_text(path)?;

@@ -86,29 +86,6 @@ fn gap_percent(objective: Objective, score: f64, optimum: f64, feasible: bool) -
     }
 }
 
-/// Every instance file under `dir`, sorted.
-fn collect(dir: &Path, files: &mut Vec<PathBuf>) -> Result<(), CliError> {
-    let read_err = |source| CliError::Read {
-        path: dir.to_path_buf(),
-        source,
-    };
-    let mut entries = std::fs::read_dir(dir)
-        .map_err(read_err)?
-        .map(|e| e.map(|e| e.path()))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(read_err)?;
-    entries.sort();
-    for path in entries {
-        let is_dir = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir());
-        if is_dir {
-            collect(&path, files)?;
-        } else if path.extension().is_some_and(|e| e == "json" || e == "txt") && path.is_file() {
-            files.push(path);
-        }
-    }
-    Ok(())
-}
-
 /// The first `best_known.csv` in `dir` or above it.
 fn best_known(dir: &Path) -> Result<Option<BestKnown>, CliError> {
     let start = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
@@ -170,7 +147,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ));
     }
     let mut files = Vec::new();
-    collect(&args.instances, &mut files)?;
+    super::collect_files(&args.instances, &["json", "txt"], &mut files)?;
     if files.is_empty() {
         return Err(CliError::Usage(format!(
             "--instances {}: no instance files (*.json, *.txt) in the folder",
