@@ -33,7 +33,7 @@ use crate::msg::{
 use crate::problem::{MAX_NODES, NodeSet, Problem, ProblemError};
 use crate::rng::{PlannerRng, derive_seed};
 use crate::route::{Route, RouteEval};
-use crate::solver::{Budget, Solver, StopReason, run};
+use crate::solver::{Algorithm, Budget, Solver, StopReason, run};
 use crate::transport::clock::mono_now_ns;
 
 /// Settings of the re-planning service; [`ServiceConfig::default`] documents each default.
@@ -57,6 +57,8 @@ pub struct ServiceConfig {
     pub reserve_s: f64,
     /// Seed of the planner's random draws.
     pub seed: u64,
+    /// The solver `make_solver` builds (default `auto`, issue 5).
+    pub algorithm: Algorithm,
     /// Scenario fingerprint of this process.
     pub fingerprint: u64,
     /// Plans published before the steady state begins (our choice: 1; the
@@ -79,6 +81,7 @@ impl Default for ServiceConfig {
             cut_at_deadline: true,
             reserve_s: DEFAULT_RESERVE_S,
             seed: 1,
+            algorithm: Algorithm::Auto,
             fingerprint: 0,
             warmup_plans: 1,
         }
