@@ -1114,3 +1114,30 @@ fn bad_input_time_limit() {
     let out = planner(&["solve", "--instance", p, "--algorithm", "exact", "--iterations", "5"]);
     assert_input_error(&out, &["--iterations 5", "--time-limit"]);
 }
+
+#[test]
+fn montecarlo_includes_auto_next_to_pso_and_bbo() {
+    let dir = scratch("montecarlo-auto");
+    let out_dir = dir.join("out");
+    let out = planner(&[
+        "montecarlo",
+        "--runs",
+        "2",
+        "--nodes",
+        "12",
+        "--algorithms",
+        "pso,bbo,auto",
+        "--threads",
+        "1",
+        "--out",
+        path_str(&out_dir),
+    ]);
+    assert_ok(&out);
+    assert!(stdout(&out).contains("auto"), "{}", stdout(&out));
+    let csv = std::fs::read_to_string(out_dir.join("runs.csv")).unwrap();
+    let algorithms: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').nth(1).unwrap()).collect();
+    assert_eq!(algorithms, ["pso", "bbo", "auto", "pso", "bbo", "auto"]);
+    for row in csv.lines().skip(1) {
+        assert!(row.ends_with(",true"), "infeasible: {row}");
+    }
+}
