@@ -212,3 +212,29 @@ pub fn run_serve(args: &ServeArgs) -> ExitCode {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        service: ServiceArgs,
+    }
+
+    #[test]
+    fn the_service_plans_with_auto_unless_told_otherwise() {
+        let default = Cli::try_parse_from(["x"]).unwrap().service;
+        assert_eq!(default.algorithm, Algorithm::Auto);
+        let cfg = default.config(7, false).unwrap();
+        assert_eq!(cfg.algorithm, Algorithm::Auto);
+        assert_eq!(make_solver(cfg.algorithm).name(), "auto");
+        for (flag, name) in [("pso", "pso"), ("bbo", "bbo"), ("auto", "auto")] {
+            let args = Cli::try_parse_from(["x", "--algorithm", flag]).unwrap().service;
+            assert_eq!(make_solver(args.config(7, true).unwrap().algorithm).name(), name);
+        }
+        assert!(Cli::try_parse_from(["x", "--algorithm", "exact"]).is_err());
+    }
+}
