@@ -2,6 +2,7 @@
 //! mission runs the same loop in-process; the latency bench starts this).
 
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::alloc;
@@ -14,6 +15,7 @@ use crate::solver::pso::{Pso, PsoSettings};
 use crate::transport::guard::Guarded;
 use crate::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use crate::transport::{IpcArgs, Role, SetupError, TransportError, signal};
+use crate::wire::{FaultCycle, PLAN_FAULTS, WireRules};
 
 /// Flags of the planning service (shared by `serve` and `mission`).
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -38,6 +40,10 @@ pub struct ServiceArgs {
     /// deadline (needs CAP_SYS_NICE or root).
     #[arg(long, value_name = "PRIO")]
     pub rt_priority: Option<i32>,
+    /// Tests: also send a bad plan before each good one, taking these kinds
+    /// in turn (non_edge, visited_node, or all); the vehicle must refuse them.
+    #[arg(long, value_name = "KIND[,KIND…]")]
+    pub inject_plan: Option<String>,
 }
 
 /// `planner serve` flags.
@@ -96,6 +102,7 @@ impl ServiceArgs {
                 self.reserve_s
             )));
         }
+        self.plan_faults()?;
         Ok(ServiceConfig {
             deadline: Duration::from_secs_f64(self.deadline_ms / 1000.0),
             reserve_s: self.reserve_s,
@@ -106,6 +113,14 @@ impl ServiceArgs {
             fingerprint,
             ..ServiceConfig::default()
         })
+    }
+}
+
+impl ServiceArgs {
+    /// The plan faults `--inject-plan` asks for (none without the flag).
+    pub fn plan_faults(&self) -> Result<FaultCycle, ServeError> {
+        FaultCycle::parse_opt("--inject-plan", self.inject_plan.as_deref(), &PLAN_FAULTS)
+            .map_err(|e| ServeError::Usage(e.to_string()))
     }
 }
 
@@ -124,15 +139,23 @@ pub type ShmPlannerPorts = PlannerPorts<
     IpcOutbox<Shm, PlannerStatus>,
 >;
 
-/// Opens the planner's ports in the context's domain.
-pub fn open_ports(ctx: &IpcContext<Shm>, fingerprint: u64) -> Result<ShmPlannerPorts, SetupError> {
+/// Opens the planner's ports in the context's domain; inputs are checked
+/// against `rules` (the scenario's world) besides their own validation.
+pub fn open_ports(
+    ctx: &IpcContext<Shm>,
+    fingerprint: u64,
+    rules: &Arc<WireRules>,
+    inject_plans: FaultCycle,
+) -> Result<ShmPlannerPorts, SetupError> {
     let stamp = Stamp::new(fingerprint);
     Ok(PlannerPorts {
         waker: ctx.waker(Role::Planner)?,
-        states: Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "planner"),
-        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "planner"),
+        states: Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "planner").with_check(rules.state_check()),
+        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "planner")
+            .with_check(rules.snapshot_check()),
         plans: ctx.outbox::<Plan>(stamp)?,
         status: ctx.outbox::<PlannerStatus>(stamp)?,
+        inject_plans,
     })
 }
 
@@ -165,12 +188,14 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     signal::install();
     let world = load_world(&args.scenario)?;
     let fingerprint = world.fingerprint();
+    let rules = Arc::new(WireRules::new(&world));
     drop(world);
     let cfg = args.service.config(fingerprint, args.lockstep)?;
+    let plan_faults = args.service.plan_faults()?;
     let opts = args.ipc.options()?;
     prepare_service_thread(args.service.rt_priority)?;
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
-    let mut ports = open_ports(&ctx, fingerprint)?;
+    let mut ports = open_ports(&ctx, fingerprint, &rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver());
     let exit = run_service(&mut core, &mut ports, &mut |_: &ServiceEvent| {}, &mut |_| true)?;
     let c = core.counters();

@@ -1,6 +1,8 @@
 //! Validation on the receiving side: a wrapper that passes on only messages
-//! that are well-formed ([`Validate`]), from our scenario and in sequence
-//! ([`SeqGuard`]), and counts the rest by [`RejectKind`].
+//! that are well-formed ([`Validate`]), fit the receiver's world (an optional
+//! [`ContextCheck`], e.g. waypoints over water and inside their bounds), are
+//! from our scenario and in sequence ([`SeqGuard`]), and counts the rest by
+//! [`RejectKind`]. A rejected message never advances the sequence check.
 //!
 //! Rejections are reported on stderr without flooding: the first of each kind
 //! at once, then at most one line per kind per [`REPORT_INTERVAL_NS`] with the
@@ -12,9 +14,15 @@ use crate::msg::{Message, RejectCounters, RejectKind, SeqGuard};
 /// Least time between two stderr lines about the same kind of rejection, ns.
 pub const REPORT_INTERVAL_NS: u64 = 1_000_000_000;
 
+/// A receiver-side check that needs more than the message itself (the
+/// scenario's chart, bounds, node count). Runs after [`Validate`], so it sees
+/// only well-formed messages; it must not allocate.
+pub type ContextCheck<T> = Box<dyn Fn(&T) -> Result<(), RejectKind>>;
+
 /// An [`Inbox`] behind the validators.
 pub struct Guarded<T: Message, I: Inbox<T>> {
     inbox: I,
+    check: Option<ContextCheck<T>>,
     seq: SeqGuard,
     rejected: RejectCounters,
     last_report_ns: [u64; crate::msg::REJECT_KINDS],
@@ -29,6 +37,7 @@ impl<T: Message, I: Inbox<T>> Guarded<T, I> {
     pub fn new(inbox: I, fingerprint: u64, who: &'static str) -> Self {
         Self {
             inbox,
+            check: None,
             seq: SeqGuard::new(fingerprint),
             rejected: RejectCounters::default(),
             last_report_ns: [0; crate::msg::REJECT_KINDS],
@@ -36,6 +45,13 @@ impl<T: Message, I: Inbox<T>> Guarded<T, I> {
             who,
             _t: core::marker::PhantomData,
         }
+    }
+
+    /// The same guard with `check` run on every well-formed message before
+    /// its sequence number is looked at.
+    pub fn with_check(mut self, check: ContextCheck<T>) -> Self {
+        self.check = Some(check);
+        self
     }
 
     /// Calls `each` for every accepted message, oldest first; returns how
@@ -48,8 +64,15 @@ impl<T: Message, I: Inbox<T>> Guarded<T, I> {
         let unreported = &mut self.unreported;
         let who = self.who;
         let fp = seq.fingerprint();
+        let check = &self.check;
         self.inbox.drain(&mut |m: &T| {
-            let verdict = m.validate().and_then(|()| seq.accept(m.header()));
+            // The scenario first: a message of another world would otherwise
+            // be misreported as, e.g., a waypoint outside its bound.
+            let verdict = seq
+                .same_scenario(m.header())
+                .and_then(|()| m.validate())
+                .and_then(|()| check.as_ref().map_or(Ok(()), |c| c(m)))
+                .and_then(|()| seq.accept(m.header()));
             match verdict {
                 Ok(()) => {
                     accepted += 1;
