@@ -34,12 +34,16 @@ const PLAN: [&str; 2] = ["non_edge", "visited_node"];
 
 /// Runs a lockstep mission on 12 waypoints; returns (report, stderr, prefix).
 fn mission(extra: &[&str]) -> (Value, String, String) {
+    mission_with(true, extra)
+}
+
+/// Runs a mission on 12 waypoints, lockstep or not; returns (report, stderr, prefix).
+fn mission_with(lockstep: bool, extra: &[&str]) -> (Value, String, String) {
     let out = temp_dir("w");
     let p = prefix("w");
     let out_s = out.display().to_string();
     let mut args = vec![
         "mission",
-        "--lockstep",
         "--quiet",
         "--seed",
         "1",
@@ -50,6 +54,9 @@ fn mission(extra: &[&str]) -> (Value, String, String) {
         "--ipc-prefix",
         &p,
     ];
+    if lockstep {
+        args.push("--lockstep");
+    }
     args.extend_from_slice(extra);
     let o = run(&binary("planner"), &args, LIMIT);
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
@@ -135,6 +142,42 @@ fn every_injected_kind_is_rejected_counted_by_kind_and_the_mission_runs_as_witho
         lines <= kinds * (wall + 1.0) * 2.0 && lines < refused,
         "{lines} lines for {refused} refusals in {wall} s"
     );
+    // Refusing costs the planner no allocation either.
+    assert_eq!(r["steady_state_allocations"], 0, "{:#}", r["allocations"]);
+    assert_eq!(r["shm_files_left"], 0);
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+}
+
+#[test]
+fn scaled_time_missions_refuse_bad_input_too() {
+    // Scaled time (what a soak runs): the pacing is the machine's, so only
+    // the outcome-independent facts are asserted.
+    let (r, stderr, p) = mission_with(
+        false,
+        &[
+            "--time-scale",
+            "10000",
+            "--inject-sensor",
+            "all",
+            "--inject-vehicle",
+            "all",
+            "--inject-plan",
+            "all",
+        ],
+    );
+    for kind in SENSOR.iter().chain(&VEHICLE) {
+        assert!(
+            count(&r, "planner", kind) > 0,
+            "planner never refused {kind}: {r:#}\n{stderr}"
+        );
+    }
+    for receiver in ["planner", "vehicle"] {
+        for kind in ["malformed", "out_of_range"] {
+            assert_eq!(count(&r, receiver, kind), 0, "{receiver}/{kind}: {r:#}");
+        }
+    }
+    assert!(r["outcome"] == "goal_reached" || r["outcome"] == "timed_out", "{r:#}");
+    assert!(r["time_used_s"].as_f64().unwrap() <= r["time_available_s"].as_f64().unwrap());
     assert_eq!(r["shm_files_left"], 0);
     assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
 }

@@ -814,6 +814,20 @@ impl RejectCounters {
     }
 }
 
+/// "kind count, kind count, …" for the non-zero kinds (log lines).
+impl core::fmt::Display for RejectCounters {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let mut first = true;
+        for (k, n) in RejectKind::ALL.iter().zip(self.0) {
+            if n > 0 {
+                write!(f, "{}{} {n}", if first { "" } else { ", " }, k.as_str())?;
+                first = false;
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A route carried in a message, as node ids (`len` checked against capacity).
 pub fn route_ids(route: &[u8; MAX_NODES], len: u32) -> &[u8] {
     &route[..(len as usize).min(MAX_NODES)]
@@ -931,6 +945,18 @@ mod tests {
         restarted.session = 8;
         assert_eq!(g.accept(&restarted), Ok(()));
         assert_eq!(g.last(), (8, 1));
+    }
+
+    #[test]
+    fn reject_counters_print_the_non_zero_kinds() {
+        let mut r = RejectCounters::default();
+        assert_eq!(r.to_string(), "");
+        r.add(RejectKind::Repeated);
+        r.add(RejectKind::Repeated);
+        r.add(RejectKind::VisitedNode);
+        assert_eq!(r.to_string(), "repeated 2, visited_node 1");
+        assert_eq!(RejectKind::from_name("non_edge"), Some(RejectKind::NonEdge));
+        assert_eq!(RejectKind::from_name("nope"), None);
     }
 
     #[test]

@@ -164,22 +164,11 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     let r = states.rejected();
     if r.total() > 0 {
         eprintln!(
-            "sensor-sim: rejected {} vehicle state message(s) in all: {}",
-            r.total(),
-            by_kind(r)
+            "sensor-sim: rejected {} vehicle state message(s) in all: {r}",
+            r.total()
         );
     }
     outcome
-}
-
-fn by_kind(r: &planner::msg::RejectCounters) -> String {
-    planner::msg::RejectKind::ALL
-        .iter()
-        .zip(r.0)
-        .filter(|(_, n)| *n > 0)
-        .map(|(k, n)| format!("{} {n}", k.as_str()))
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -213,6 +213,10 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
         a.pool_allocs_steady,
         a.pool_high_water
     );
+    let r = ports.rejected();
+    if r.total() > 0 {
+        eprintln!("planner: rejected {} input message(s) in all: {r}", r.total());
+    }
     Ok(exit)
 }
 
