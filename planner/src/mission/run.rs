@@ -374,7 +374,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let fingerprint = world.fingerprint();
     let cfg = a
         .service
-        .config(fingerprint, a.lockstep && !a.enforce_deadline)
+        .config(&world, a.lockstep && !a.enforce_deadline)
         .map_err(|e| match e {
             ServeError::Usage(u) => MissionError::Usage(u),
             other => MissionError::Serve(other),

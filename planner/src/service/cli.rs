@@ -7,7 +7,7 @@ use std::time::Duration;
 use super::alloc;
 use super::core::{PlannerCore, ServiceConfig, ServiceEvent};
 use super::run::{ExitReason, PlannerPorts, run_service};
-use crate::mission::world::{ScenarioArgs, WorldError, load_world};
+use crate::mission::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
 use crate::msg::{Plan, PlannerStatus, VehicleState, WaypointSnapshot};
 use crate::solver::Solver;
 use crate::solver::pso::{Pso, PsoSettings};
@@ -30,6 +30,11 @@ pub struct ServiceArgs {
     /// Time held back from every plan's budget against drifting waypoints, s.
     #[arg(long, default_value_t = super::core::DEFAULT_RESERVE_S)]
     pub reserve_s: f64,
+    /// Scale of the expected time lost chasing each drifting waypoint, added
+    /// to the plan's edge times (1 = the simulated expectation, 0 = ignore
+    /// drift and plan on the reported positions alone).
+    #[arg(long, default_value_t = 1.0)]
+    pub drift_allowance: f64,
     /// Seed of the planner's random draws.
     #[arg(long, default_value_t = 1)]
     pub planner_seed: u64,
@@ -77,7 +82,7 @@ pub enum ServeError {
 
 impl ServiceArgs {
     /// The service configuration these flags describe.
-    pub fn config(&self, fingerprint: u64, lockstep: bool) -> Result<ServiceConfig, ServeError> {
+    pub fn config(&self, world: &MissionWorld, lockstep: bool) -> Result<ServiceConfig, ServeError> {
         if !(self.deadline_ms.is_finite() && self.deadline_ms > 1.0 && self.deadline_ms <= 60_000.0) {
             return Err(ServeError::Usage(format!(
                 "--deadline-ms {}: must be between 1 and 60000",
@@ -96,6 +101,16 @@ impl ServiceArgs {
                 self.reserve_s
             )));
         }
+        if !(self.drift_allowance.is_finite() && self.drift_allowance >= 0.0) {
+            return Err(ServeError::Usage(format!(
+                "--drift-allowance {}: must be >= 0",
+                self.drift_allowance
+            )));
+        }
+        let mut arrival_allowance_s = world.arrival_allowances_s();
+        for a in &mut arrival_allowance_s {
+            *a *= self.drift_allowance;
+        }
         Ok(ServiceConfig {
             deadline: Duration::from_secs_f64(self.deadline_ms / 1000.0),
             reserve_s: self.reserve_s,
@@ -103,7 +118,8 @@ impl ServiceArgs {
             replan_threshold_s: self.replan_threshold_s,
             cut_at_deadline: !lockstep,
             seed: self.planner_seed,
-            fingerprint,
+            fingerprint: world.fingerprint(),
+            arrival_allowance_s,
             ..ServiceConfig::default()
         })
     }
@@ -165,8 +181,8 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     signal::install();
     let world = load_world(&args.scenario)?;
     let fingerprint = world.fingerprint();
+    let cfg = args.service.config(&world, args.lockstep)?;
     drop(world);
-    let cfg = args.service.config(fingerprint, args.lockstep)?;
     let opts = args.ipc.options()?;
     prepare_service_thread(args.service.rt_priority)?;
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
