@@ -126,6 +126,7 @@ struct ServiceResult {
     latency_us: (u64, u64, u64),
     rejected: RejectCounters,
     last_state: Option<VehicleState>,
+    rt_priority: Option<i32>,
 }
 
 fn service_thread(
@@ -136,7 +137,7 @@ fn service_thread(
     shared: &Shared,
     rt_priority: Option<i32>,
 ) -> Result<ServiceResult, ServeError> {
-    prepare_service_thread(rt_priority)?;
+    let rt_priority = prepare_service_thread(rt_priority, false)?;
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint)?;
     let mut core = PlannerCore::new(cfg, make_solver());
@@ -154,6 +155,7 @@ fn service_thread(
         latency_us: (h.value_at_quantile(0.5), h.value_at_quantile(0.99), h.max()),
         rejected: ports.rejected(),
         last_state: core.last_state().copied(),
+        rt_priority,
     })
 }
 
@@ -562,6 +564,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         time_scale: a.time_scale,
         wall_time_s: wall.elapsed().as_secs_f64(),
         shm_files_left: left.len(),
+        rt_priority: service.rt_priority,
     };
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
