@@ -152,7 +152,7 @@ proptest! {
         // Plannable: any priorities decode to a valid route on its edges.
         let mut p = Problem::new();
         let start = s.start as usize;
-        if fill_problem(&s, &mut p, start, NodeSet::EMPTY, s.time_available_s).is_ok() {
+        if fill_problem(&s, &mut p, start, NodeSet::EMPTY, s.time_available_s, &[0.0; MAX_NODES]).is_ok() {
             let mut r = Route::new();
             let e = Decoder::new().decode(&p, &prio, &mut r);
             prop_assert_eq!(p.evaluate(&r), Some(e));

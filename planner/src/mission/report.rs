@@ -63,6 +63,9 @@ pub struct Report {
     pub wall_time_s: f64,
     /// Shared-memory and iceoryx2 files of the run left after it.
     pub shm_files_left: usize,
+    /// SCHED_FIFO priority of the planner's service thread (None: normal
+    /// scheduling).
+    pub rt_priority: Option<i32>,
 }
 
 impl Report {
@@ -125,6 +128,7 @@ impl Report {
             },
             "plans_rejected_by_vehicle": self.plans_rejected_by_vehicle,
             "seed": self.seed,
+            "rt_priority": self.rt_priority,
             "planner_seed": self.planner_seed,
             "fingerprint": format!("{:016x}", self.fingerprint),
             "scenario": self.scenario,
@@ -158,7 +162,7 @@ impl Report {
              {} deadline misses (deadline {} ms), {} cut by the deadline, {} fallbacks\n\
              allocations in steady state: {} system, {} pool blocks (high water {} of {}); \
              {} sensor updates; {} rejected messages\n\
-             ({}; {}, wall time {:.1} s)",
+             ({}; {}, planner on {}, wall time {:.1} s)",
             self.time_used_s,
             self.time_available_s,
             self.tasks_completed,
@@ -186,6 +190,8 @@ impl Report {
             } else {
                 format!("{}× real time", self.time_scale)
             },
+            self.rt_priority
+                .map_or("normal scheduling".to_string(), |p| format!("SCHED_FIFO {p}")),
             self.wall_time_s
         )
     }

@@ -134,6 +134,7 @@ struct ServiceResult {
     latency_us: (u64, u64, u64),
     rejected: RejectCounters,
     last_state: Option<VehicleState>,
+    rt_priority: Option<i32>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -147,7 +148,7 @@ fn service_thread(
     shared: &Shared,
     rt_priority: Option<i32>,
 ) -> Result<ServiceResult, ServeError> {
-    prepare_service_thread(rt_priority)?;
+    let rt_priority = prepare_service_thread(rt_priority, false)?;
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver());
@@ -165,6 +166,7 @@ fn service_thread(
         latency_us: (h.value_at_quantile(0.5), h.value_at_quantile(0.99), h.max()),
         rejected: ports.rejected(),
         last_state: core.last_state().copied(),
+        rt_priority,
     })
 }
 
@@ -385,7 +387,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let fingerprint = world.fingerprint();
     let cfg = a
         .service
-        .config(fingerprint, a.lockstep && !a.enforce_deadline)
+        .config(&world, a.lockstep && !a.enforce_deadline)
         .map_err(|e| match e {
             ServeError::Usage(u) => MissionError::Usage(u),
             other => MissionError::Serve(other),
@@ -602,6 +604,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         time_scale: a.time_scale,
         wall_time_s: wall.elapsed().as_secs_f64(),
         shm_files_left: left.len(),
+        rt_priority: service.rt_priority,
     };
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
