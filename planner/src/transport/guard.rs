@@ -25,8 +25,7 @@ pub struct Guarded<T: Message, I: Inbox<T>> {
     check: Option<ContextCheck<T>>,
     seq: SeqGuard,
     rejected: RejectCounters,
-    last_report_ns: [u64; crate::msg::REJECT_KINDS],
-    unreported: [u64; crate::msg::REJECT_KINDS],
+    limit: RateLimit,
     who: &'static str,
     _t: core::marker::PhantomData<T>,
 }
@@ -40,8 +39,7 @@ impl<T: Message, I: Inbox<T>> Guarded<T, I> {
             check: None,
             seq: SeqGuard::new(fingerprint),
             rejected: RejectCounters::default(),
-            last_report_ns: [0; crate::msg::REJECT_KINDS],
-            unreported: [0; crate::msg::REJECT_KINDS],
+            limit: RateLimit::default(),
             who,
             _t: core::marker::PhantomData,
         }
@@ -60,8 +58,7 @@ impl<T: Message, I: Inbox<T>> Guarded<T, I> {
         let mut accepted = 0;
         let seq = &mut self.seq;
         let rejected = &mut self.rejected;
-        let last = &mut self.last_report_ns;
-        let unreported = &mut self.unreported;
+        let limit = &mut self.limit;
         let who = self.who;
         let fp = seq.fingerprint();
         let check = &self.check;
@@ -80,7 +77,7 @@ impl<T: Message, I: Inbox<T>> Guarded<T, I> {
                 }
                 Err(kind) => {
                     rejected.add(kind);
-                    report(who, T::NAME, kind, m.header().fingerprint, fp, last, unreported);
+                    report(who, T::NAME, kind, m.header().fingerprint, fp, limit);
                 }
             }
         })?;
@@ -98,15 +95,7 @@ impl<T: Message, I: Inbox<T>> Guarded<T, I> {
     pub fn reject_later(&mut self, kind: RejectKind, sender_fingerprint: u64) {
         self.rejected.add(kind);
         let fp = self.seq.fingerprint();
-        report(
-            self.who,
-            T::NAME,
-            kind,
-            sender_fingerprint,
-            fp,
-            &mut self.last_report_ns,
-            &mut self.unreported,
-        );
+        report(self.who, T::NAME, kind, sender_fingerprint, fp, &mut self.limit);
     }
 
     /// (session, seq) of the last accepted message.
@@ -115,24 +104,38 @@ impl<T: Message, I: Inbox<T>> Guarded<T, I> {
     }
 }
 
-fn report(
-    who: &str,
-    what: &str,
-    kind: RejectKind,
-    theirs: u64,
-    ours: u64,
-    last: &mut [u64; crate::msg::REJECT_KINDS],
-    unreported: &mut [u64; crate::msg::REJECT_KINDS],
-) {
-    let k = kind as usize;
-    unreported[k] += 1;
-    let now = clock::mono_now_ns();
-    if last[k] != 0 && now.saturating_sub(last[k]) < REPORT_INTERVAL_NS {
-        return;
+/// Per-kind rate limit of log lines: the first rejection of a kind is
+/// reported at once, later ones at most once per [`REPORT_INTERVAL_NS`],
+/// each line carrying the count since the previous one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RateLimit {
+    last_ns: [u64; crate::msg::REJECT_KINDS],
+    unreported: [u64; crate::msg::REJECT_KINDS],
+}
+
+impl RateLimit {
+    /// Counts one rejection of `kind` at `now_ns`; returns the count to
+    /// report now (this one included), or `None` while the kind is muted.
+    pub fn note(&mut self, kind: RejectKind, now_ns: u64) -> Option<u64> {
+        let k = kind as usize;
+        self.unreported[k] += 1;
+        if self.last_ns[k] != 0 && now_ns.saturating_sub(self.last_ns[k]) < REPORT_INTERVAL_NS {
+            return None;
+        }
+        self.last_ns[k] = now_ns.max(1);
+        Some(core::mem::take(&mut self.unreported[k]))
     }
-    let n = unreported[k];
-    unreported[k] = 0;
-    last[k] = now.max(1);
+
+    /// Rejections counted but not reported yet, by kind.
+    pub fn pending(&self, kind: RejectKind) -> u64 {
+        self.unreported[kind as usize]
+    }
+}
+
+fn report(who: &str, what: &str, kind: RejectKind, theirs: u64, ours: u64, limit: &mut RateLimit) {
+    let Some(n) = limit.note(kind, clock::mono_now_ns()) else {
+        return;
+    };
     if kind == RejectKind::ForeignScenario {
         eprintln!(
             "{who}: refusing {what} from another scenario (fingerprint {theirs:016x}, ours {ours:016x}): \
@@ -140,5 +143,37 @@ fn report(
         );
     } else {
         eprintln!("{who}: rejected {n} {what} message(s): {}", kind.as_str());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_first_of_each_kind_is_reported_then_one_line_a_second_with_the_count() {
+        const S: u64 = REPORT_INTERVAL_NS;
+        let mut l = RateLimit::default();
+        assert_eq!(l.note(RejectKind::NonFinite, 5 * S), Some(1));
+        // Muted within the interval, counted all the same.
+        for k in 1..100 {
+            assert_eq!(l.note(RejectKind::NonFinite, 5 * S + k * S / 100), None);
+        }
+        assert_eq!(l.pending(RejectKind::NonFinite), 99);
+        // Another kind has its own limit.
+        assert_eq!(l.note(RejectKind::Repeated, 5 * S + 1), Some(1));
+        // After the interval, one line with everything since the last one.
+        assert_eq!(l.note(RejectKind::NonFinite, 6 * S), Some(100));
+        assert_eq!(l.pending(RejectKind::NonFinite), 0);
+        assert_eq!(l.note(RejectKind::NonFinite, 6 * S + 1), None);
+        // A reading of 0 still counts as a line sent (the next comes an
+        // interval later), and a clock that steps back mutes only until it
+        // has caught up.
+        let mut z = RateLimit::default();
+        assert_eq!(z.note(RejectKind::OffWater, 0), Some(1));
+        assert_eq!(z.note(RejectKind::OffWater, S / 2), None);
+        assert_eq!(z.note(RejectKind::OffWater, S + 1), Some(2));
+        assert_eq!(z.note(RejectKind::OffWater, 1), None);
+        assert_eq!(z.note(RejectKind::OffWater, 2 * S + 1), Some(2));
     }
 }
