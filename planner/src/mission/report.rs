@@ -161,7 +161,7 @@ impl Report {
              planner: {} plans ({} re-plans), latency p50 {} µs, p99 {} µs, max {} µs; \
              {} deadline misses (deadline {} ms), {} cut by the deadline, {} fallbacks\n\
              allocations in steady state: {} system, {} pool blocks (high water {} of {}); \
-             {} sensor updates; {} rejected messages\n\
+             {} sensor updates; {} rejected messages{}\n\
              ({}; {}, planner on {}, wall time {:.1} s)",
             self.time_used_s,
             self.time_available_s,
@@ -184,6 +184,14 @@ impl Report {
             self.alloc.pool_capacity,
             self.sensor_updates,
             self.all_rejected().total(),
+            {
+                let all = self.all_rejected();
+                if all.total() > 0 {
+                    format!(" ({all})")
+                } else {
+                    String::new()
+                }
+            },
             self.scenario,
             if self.lockstep {
                 "lockstep".to_string()
