@@ -148,7 +148,7 @@ fn service_thread(
     shared: &Shared,
     rt_priority: Option<i32>,
 ) -> Result<ServiceResult, ServeError> {
-    let rt_priority = prepare_service_thread(rt_priority, false)?;
+    let rt_priority = prepare_service_thread(rt_priority, cfg.cut_at_deadline)?;
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver());

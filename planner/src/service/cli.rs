@@ -43,8 +43,9 @@ pub struct ServiceArgs {
     /// Run the service thread under SCHED_FIFO with this priority (1..=99;
     /// 0 = normal scheduling), so other work on the machine cannot preempt a
     /// solve past its deadline (needs CAP_SYS_NICE or root). Default: try
-    /// priority 10 when waiting on events, fall back to normal scheduling
-    /// with a warning if refused; normal scheduling with --spin.
+    /// priority 10 when deadlines are enforced and the service waits on
+    /// events, falling back to normal scheduling with a warning if refused;
+    /// normal scheduling with --spin or in lockstep (nothing is cut there).
     #[arg(long, value_name = "PRIO")]
     pub rt_priority: Option<i32>,
     /// Tests: also send a bad plan before each good one, taking these kinds
@@ -191,10 +192,11 @@ pub fn open_ports(
 
 /// Prepares the calling thread as the service thread: counted by the
 /// allocator and served from its pool, and scheduled SCHED_FIFO as
-/// `rt_priority` asks (see [`ServiceArgs::rt_priority`]; a spinning service
-/// stays on normal scheduling by default, as an RT spin would starve the
+/// `rt_priority` asks (see [`ServiceArgs::rt_priority`]); without a request
+/// it tries [`DEFAULT_RT_PRIORITY`] only when `default_rt` (deadlines are
+/// enforced, and the service does not spin: an RT spin would starve the
 /// machine). Returns the RT priority in force, if any.
-pub fn prepare_service_thread(rt_priority: Option<i32>, spin: bool) -> Result<Option<i32>, ServeError> {
+pub fn prepare_service_thread(rt_priority: Option<i32>, default_rt: bool) -> Result<Option<i32>, ServeError> {
     alloc::watch_this_thread();
     alloc::reserve_pool();
     let (prio, required) = match rt_priority {
@@ -205,7 +207,7 @@ pub fn prepare_service_thread(rt_priority: Option<i32>, spin: bool) -> Result<Op
                 "--rt-priority {p}: must be between 0 and 99"
             )));
         }
-        None if spin => return Ok(None),
+        None if !default_rt => return Ok(None),
         None => (DEFAULT_RT_PRIORITY, false),
     };
     let param = libc::sched_param { sched_priority: prio };
@@ -236,7 +238,7 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     let plan_faults = args.service.plan_faults()?;
     drop(world);
     let opts = args.ipc.options()?;
-    prepare_service_thread(args.service.rt_priority, args.ipc.spin)?;
+    prepare_service_thread(args.service.rt_priority, !args.ipc.spin && !args.lockstep)?;
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, &rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver());
