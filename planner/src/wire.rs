@@ -176,11 +176,17 @@ pub enum Fault {
     NonEdge,
     /// A plan back through a waypoint the vehicle already visited.
     VisitedNode,
+    /// An unknown enum code (objective, vehicle mode).
+    Malformed,
+    /// A number outside its range (speed ≤ 0, negative time to be free).
+    OutOfRange,
+    /// A plan that does not start where the vehicle will be free.
+    BadPlan,
 }
 
 impl Fault {
     /// Every fault, in the order of [`Fault::as_str`]'s documentation.
-    pub const ALL: [Fault; 9] = [
+    pub const ALL: [Fault; 12] = [
         Self::NonFinite,
         Self::NodeOutOfRange,
         Self::OffWater,
@@ -190,6 +196,9 @@ impl Fault {
         Self::ForeignScenario,
         Self::NonEdge,
         Self::VisitedNode,
+        Self::Malformed,
+        Self::OutOfRange,
+        Self::BadPlan,
     ];
 
     /// The flag value naming this fault (the name of the rejection it causes).
@@ -209,6 +218,9 @@ impl Fault {
             Self::ForeignScenario => RejectKind::ForeignScenario,
             Self::NonEdge => RejectKind::NonEdge,
             Self::VisitedNode => RejectKind::VisitedNode,
+            Self::Malformed => RejectKind::Malformed,
+            Self::OutOfRange => RejectKind::OutOfRange,
+            Self::BadPlan => RejectKind::BadPlan,
         }
     }
 
@@ -227,7 +239,7 @@ impl Fault {
 }
 
 /// Faults sensor-sim can inject into waypoint snapshots.
-pub const SENSOR_FAULTS: [Fault; 7] = [
+pub const SENSOR_FAULTS: [Fault; 9] = [
     Fault::NonFinite,
     Fault::NodeOutOfRange,
     Fault::OffWater,
@@ -235,19 +247,23 @@ pub const SENSOR_FAULTS: [Fault; 7] = [
     Fault::OutOfOrder,
     Fault::Repeated,
     Fault::ForeignScenario,
+    Fault::Malformed,
+    Fault::OutOfRange,
 ];
 
 /// Faults vehicle-sim can inject into its state messages.
-pub const VEHICLE_FAULTS: [Fault; 5] = [
+pub const VEHICLE_FAULTS: [Fault; 7] = [
     Fault::NonFinite,
     Fault::NodeOutOfRange,
     Fault::OutOfOrder,
     Fault::Repeated,
     Fault::ForeignScenario,
+    Fault::Malformed,
+    Fault::OutOfRange,
 ];
 
 /// Faults the planner can inject into its plans.
-pub const PLAN_FAULTS: [Fault; 2] = [Fault::NonEdge, Fault::VisitedNode];
+pub const PLAN_FAULTS: [Fault; 3] = [Fault::NonEdge, Fault::VisitedNode, Fault::BadPlan];
 
 /// A bad `--inject` list.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -267,7 +283,7 @@ pub struct FaultListError {
 /// where it is used (the planner's service loop).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FaultCycle {
-    faults: [Option<Fault>; 9],
+    faults: [Option<Fault>; 12],
     len: usize,
     next: usize,
 }
@@ -275,7 +291,7 @@ pub struct FaultCycle {
 impl FaultCycle {
     /// No faults.
     pub const NONE: FaultCycle = FaultCycle {
-        faults: [None; 9],
+        faults: [None; 12],
         len: 0,
         next: 0,
     };
@@ -396,6 +412,14 @@ pub fn corrupt_snapshot(f: Fault, s: &mut WaypointSnapshot, rules: &WireRules, k
             s.nodes[i].z = nom[2] + b[2] + 1.0;
             true
         }
+        Fault::Malformed => {
+            s.objective = u32::MAX;
+            true
+        }
+        Fault::OutOfRange => {
+            s.speed_mps = -s.speed_mps;
+            true
+        }
         _ => false,
     }
 }
@@ -412,13 +436,23 @@ pub fn corrupt_state(f: Fault, s: &mut VehicleState, n: usize) -> bool {
             s.to_node = n as u32;
             true
         }
+        Fault::Malformed => {
+            s.mode = u32::MAX;
+            true
+        }
+        Fault::OutOfRange => {
+            s.eta_free_s = -1.0;
+            true
+        }
         _ => false,
     }
 }
 
 /// A bad route for a plan fault, written to `out`: from the good route's
 /// first node (where the vehicle will be free) to the goal, through a node
-/// that is no neighbour (`non_edge`) or already visited (`visited_node`).
+/// that is no neighbour (`non_edge`) or already visited (`visited_node`);
+/// or the goal alone, which is not where the vehicle will be free
+/// (`bad_plan`).
 /// `visited` is the vehicle's route so far. Returns the length, or `None`
 /// when the fault cannot be built now (e.g. nothing visited yet).
 pub fn bad_route(
@@ -436,6 +470,10 @@ pub fn bad_route(
     let mut seen = NodeSet::EMPTY;
     for &v in visited {
         seen.insert(v as usize);
+    }
+    if f == Fault::BadPlan {
+        out[0] = goal;
+        return Some(1);
     }
     let via = match f {
         Fault::NonEdge => (0..n).find(|&x| {
@@ -565,6 +603,9 @@ mod tests {
         );
         let len = bad_route(Fault::VisitedNode, &[3, goal], &s, &[start, 3], &mut out).unwrap();
         assert_eq!(&out[..len], &[3, start, goal]);
+        let len = bad_route(Fault::BadPlan, &[3, goal], &s, &[start, 3], &mut out).unwrap();
+        assert_eq!(&out[..len], &[goal]);
+        assert_eq!(bad_route(Fault::OffWater, &[3, goal], &s, &[start, 3], &mut out), None);
     }
 
     #[test]

@@ -49,7 +49,8 @@ struct Args {
     sensor_period_s: Option<f64>,
     /// Tests: send a bad snapshot next to each good one from epoch 1 on,
     /// these kinds in turn: non_finite, node_out_of_range, off_water,
-    /// outside_bound, out_of_order, repeated, foreign_scenario, or all.
+    /// outside_bound, out_of_order, repeated, foreign_scenario, malformed,
+    /// out_of_range, or all.
     #[arg(long, value_name = "KIND[,KIND…]")]
     inject: Option<String>,
 }

@@ -57,7 +57,7 @@ struct Args {
     answer_timeout_s: f64,
     /// Tests: send a bad state next to each good one after the first, these
     /// kinds in turn: non_finite, node_out_of_range, out_of_order, repeated,
-    /// foreign_scenario, or all.
+    /// foreign_scenario, malformed, out_of_range, or all.
     #[arg(long, value_name = "KIND[,KIND…]")]
     inject: Option<String>,
 }

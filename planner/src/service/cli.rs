@@ -49,7 +49,7 @@ pub struct ServiceArgs {
     #[arg(long, value_name = "PRIO")]
     pub rt_priority: Option<i32>,
     /// Tests: also send a bad plan before each good one, taking these kinds
-    /// in turn (non_edge, visited_node, or all); the vehicle must refuse them.
+    /// in turn (non_edge, visited_node, bad_plan, or all); the vehicle must refuse them.
     #[arg(long, value_name = "KIND[,KIND…]")]
     pub inject_plan: Option<String>,
 }
