@@ -151,7 +151,7 @@ fn service_thread(
     let rt_priority = prepare_service_thread(rt_priority, cfg.cut_at_deadline)?;
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, rules, plan_faults)?;
-    let mut core = PlannerCore::new(cfg, make_solver());
+    let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
     let exit = run_service(&mut core, &mut ports, events, &mut |c: &PlannerCore| {
         shared
             .mission_time_bits

@@ -10,8 +10,7 @@ use super::core::{PlannerCore, ServiceConfig, ServiceEvent};
 use super::run::{ExitReason, PlannerPorts, run_service};
 use crate::mission::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
 use crate::msg::{Plan, PlannerStatus, VehicleState, WaypointSnapshot};
-use crate::solver::Solver;
-use crate::solver::pso::{Pso, PsoSettings};
+use crate::solver::{Algorithm, Solver};
 use crate::transport::guard::Guarded;
 use crate::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use crate::transport::{IpcArgs, Role, SetupError, TransportError, signal};
@@ -26,6 +25,9 @@ pub struct ServiceArgs {
     /// Solver iterations per re-plan (cut at the deadline).
     #[arg(long, default_value_t = 150)]
     pub iterations: u32,
+    /// Planner: auto (memetic PSO + local search, issue 5), or the paper's pso or bbo.
+    #[arg(long, value_name = "auto|pso|bbo", default_value_t = Algorithm::Auto)]
+    pub algorithm: Algorithm,
     /// Re-plan on a sensor update when the plan's remaining time moves by more than this, s.
     #[arg(long, default_value_t = 120.0)]
     pub replan_threshold_s: f64,
@@ -142,6 +144,7 @@ impl ServiceArgs {
             seed: self.planner_seed,
             fingerprint: world.fingerprint(),
             arrival_allowance_s,
+            algorithm: self.algorithm,
             ..ServiceConfig::default()
         })
     }
@@ -155,10 +158,12 @@ impl ServiceArgs {
     }
 }
 
-/// The solver the service runs: the paper's PSO (150 particles; the
-/// iteration budget comes from the service configuration, default 150).
-pub fn make_solver() -> Box<dyn Solver> {
-    Box::new(Pso::new(PsoSettings::paper()))
+/// The solver the service runs: `auto` by default (issue 5), or the paper's
+/// PSO (150 particles, inertia schedule over the paper's 150 iterations) or
+/// BBO. The iteration budget per re-plan comes from the service
+/// configuration (default 150), cut at the deadline.
+pub fn make_solver(algorithm: Algorithm) -> Box<dyn Solver> {
+    algorithm.build(algorithm.paper_iterations())
 }
 
 /// The planner's ports on shared memory.
@@ -241,7 +246,7 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     prepare_service_thread(args.service.rt_priority, !args.ipc.spin && !args.lockstep)?;
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, &rules, plan_faults)?;
-    let mut core = PlannerCore::new(cfg, make_solver());
+    let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
     let exit = run_service(&mut core, &mut ports, &mut |_: &ServiceEvent| {}, &mut |_| true)?;
     let c = core.counters();
     let a = alloc::counters();

@@ -33,7 +33,7 @@ use crate::msg::{
 use crate::problem::{MAX_NODES, NodeSet, Problem, ProblemError};
 use crate::rng::{PlannerRng, derive_seed};
 use crate::route::{Route, RouteEval};
-use crate::solver::{Budget, Solver, StopReason, run};
+use crate::solver::{Algorithm, Budget, Solver, StopReason, run};
 use crate::transport::clock::mono_now_ns;
 
 /// Settings of the re-planning service; [`ServiceConfig::default`] documents each default.
@@ -61,6 +61,8 @@ pub struct ServiceConfig {
     pub arrival_allowance_s: [f64; MAX_NODES],
     /// Seed of the planner's random draws.
     pub seed: u64,
+    /// The solver `make_solver` builds (default `auto`, issue 5).
+    pub algorithm: Algorithm,
     /// Scenario fingerprint of this process.
     pub fingerprint: u64,
     /// Plans published before the steady state begins (our choice: 1; the
@@ -84,6 +86,7 @@ impl Default for ServiceConfig {
             reserve_s: DEFAULT_RESERVE_S,
             arrival_allowance_s: [0.0; MAX_NODES],
             seed: 1,
+            algorithm: Algorithm::Auto,
             fingerprint: 0,
             warmup_plans: 1,
         }
