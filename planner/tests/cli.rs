@@ -1039,6 +1039,22 @@ fn solve_takes_a_deadline() {
 }
 
 #[test]
+fn mission_and_serve_refuse_bad_service_flags_before_starting_anything() {
+    for cmd in ["mission", "serve"] {
+        for (flag, value, needle) in [
+            ("--rt-priority", "100", "--rt-priority 100"),
+            ("--rt-priority", "-1", "--rt-priority -1"),
+            ("--drift-allowance", "-0.5", "--drift-allowance -0.5"),
+            ("--drift-allowance", "NaN", "--drift-allowance NaN"),
+            ("--reserve-s", "-1", "--reserve-s -1"),
+        ] {
+            let out = planner(&[cmd, "--nodes", "6", &format!("{flag}={value}")]);
+            assert_input_error(&out, &[needle]);
+        }
+    }
+}
+
+#[test]
 fn solve_exact_proves_an_optimum_no_heuristic_beats() {
     let dir = scratch("exact");
     let inst = paper_like(11);

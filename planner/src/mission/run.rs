@@ -17,6 +17,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitCode, ExitStatus, Stdio};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -33,6 +34,7 @@ use crate::service::core::{PlannerCore, ServiceConfig, ServiceCounters, ServiceE
 use crate::service::run::{ExitReason, run_service};
 use crate::transport::ipc::{IpcContext, Shm, cleanup_dead_nodes, domain_config, leftover_files, retire_domain};
 use crate::transport::{IpcOptions, SetupError, WaitMode, signal, unique_prefix};
+use crate::wire::{FaultCycle, SENSOR_FAULTS, VEHICLE_FAULTS, WireRules};
 
 /// `planner mission` flags.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -69,6 +71,12 @@ pub struct MissionArgs {
     /// Give up when a peer stays silent this long, real s.
     #[arg(long, default_value_t = 60.0)]
     pub answer_timeout_s: f64,
+    /// Tests: passed to sensor-sim as `--inject` (bad snapshots next to good ones).
+    #[arg(long, value_name = "KIND[,KIND…]")]
+    pub inject_sensor: Option<String>,
+    /// Tests: passed to vehicle-sim as `--inject` (bad vehicle states next to good ones).
+    #[arg(long, value_name = "KIND[,KIND…]")]
+    pub inject_vehicle: Option<String>,
 }
 
 /// Why a mission failed.
@@ -126,19 +134,23 @@ struct ServiceResult {
     latency_us: (u64, u64, u64),
     rejected: RejectCounters,
     last_state: Option<VehicleState>,
+    rt_priority: Option<i32>,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn service_thread(
     opts: &IpcOptions,
     fingerprint: u64,
+    rules: &Arc<WireRules>,
+    plan_faults: FaultCycle,
     cfg: ServiceConfig,
     events: &mut dyn FnMut(&ServiceEvent),
     shared: &Shared,
     rt_priority: Option<i32>,
 ) -> Result<ServiceResult, ServeError> {
-    prepare_service_thread(rt_priority)?;
+    let rt_priority = prepare_service_thread(rt_priority, cfg.cut_at_deadline)?;
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
-    let mut ports = open_ports(&ctx, fingerprint)?;
+    let mut ports = open_ports(&ctx, fingerprint, rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
     let exit = run_service(&mut core, &mut ports, events, &mut |c: &PlannerCore| {
         shared
@@ -154,6 +166,7 @@ fn service_thread(
         latency_us: (h.value_at_quantile(0.5), h.value_at_quantile(0.99), h.max()),
         rejected: ports.rejected(),
         last_state: core.last_state().copied(),
+        rt_priority,
     })
 }
 
@@ -374,11 +387,21 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let fingerprint = world.fingerprint();
     let cfg = a
         .service
-        .config(fingerprint, a.lockstep && !a.enforce_deadline)
+        .config(&world, a.lockstep && !a.enforce_deadline)
         .map_err(|e| match e {
             ServeError::Usage(u) => MissionError::Usage(u),
             other => MissionError::Serve(other),
         })?;
+    let usage = |e: crate::wire::FaultListError| MissionError::Usage(e.to_string());
+    let sensor_faults =
+        FaultCycle::parse_opt("--inject-sensor", a.inject_sensor.as_deref(), &SENSOR_FAULTS).map_err(usage)?;
+    let vehicle_faults =
+        FaultCycle::parse_opt("--inject-vehicle", a.inject_vehicle.as_deref(), &VEHICLE_FAULTS).map_err(usage)?;
+    let plan_faults = a
+        .service
+        .plan_faults()
+        .map_err(|e| MissionError::Usage(e.to_string()))?;
+    let rules = Arc::new(WireRules::new(&world));
     let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
     let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
     let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
@@ -394,6 +417,13 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     ];
     common.extend(a.scenario.to_flags());
     let mut vehicle_args = common.clone();
+    let mut sensor_args = common.clone();
+    if !sensor_faults.is_empty() {
+        sensor_args.extend(["--inject".into(), sensor_faults.to_flag_value()]);
+    }
+    if !vehicle_faults.is_empty() {
+        vehicle_args.extend(["--inject".into(), vehicle_faults.to_flag_value()]);
+    }
     if a.lockstep {
         vehicle_args.push("--lockstep".into());
     } else {
@@ -401,7 +431,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     }
     vehicle_args.extend(["--answer-timeout-s".into(), a.answer_timeout_s.to_string()]);
     let mut kids = [
-        Kid::spawn("sensor-sim", &common, &out)?,
+        Kid::spawn("sensor-sim", &sensor_args, &out)?,
         Kid::spawn("vehicle-sim", &vehicle_args, &out)?,
     ];
 
@@ -434,6 +464,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let result = std::thread::scope(|scope| {
         let shared = &shared;
         let opts = &opts;
+        let rules = &rules;
         let handle = scope.spawn(move || {
             let mut events = |e: &ServiceEvent| {
                 // Never drop an event (the log must be complete): wait for room.
@@ -444,7 +475,16 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
                     std::thread::yield_now();
                 }
             };
-            let r = service_thread(opts, fingerprint, cfg, &mut events, shared, rt_priority);
+            let r = service_thread(
+                opts,
+                fingerprint,
+                rules,
+                plan_faults,
+                cfg,
+                &mut events,
+                shared,
+                rt_priority,
+            );
             alloc::end_steady_state();
             r
         });
@@ -519,6 +559,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         (ExitReason::Finished, Some(s)) => Outcome::from_code(s.outcome).unwrap_or(Outcome::Running),
         _ => Outcome::Aborted,
     };
+    let rejected_vehicle = RejectCounters(last.map_or([0; crate::msg::REJECT_KINDS], |s| s.rejected));
     let (route, tasks, weight, distance, t_used, rejected_by_vehicle) = match last {
         Some(s) => (
             crate::msg::route_ids(&s.route, s.route_len)
@@ -553,6 +594,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         allocator_installed: alloc::installed(),
         sensor_updates: c.sensor_updates,
         rejected: service.rejected,
+        rejected_vehicle,
         plans_rejected_by_vehicle: rejected_by_vehicle,
         seed: a.scenario.seed,
         planner_seed: a.service.planner_seed,
@@ -562,6 +604,7 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         time_scale: a.time_scale,
         wall_time_s: wall.elapsed().as_secs_f64(),
         shm_files_left: left.len(),
+        rt_priority: service.rt_priority,
     };
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();

@@ -55,6 +55,10 @@ pub struct ServiceConfig {
     /// waypoints drifting while the vehicle is committed to an edge (a plan
     /// that uses the budget to the second cannot absorb a longer edge).
     pub reserve_s: f64,
+    /// Expected extra time to reach each waypoint while it drifts, s, by
+    /// node id (see `scenario::chase`); added to the edges' planned times,
+    /// half at each end, so a route pays it once per drifting waypoint.
+    pub arrival_allowance_s: [f64; MAX_NODES],
     /// Seed of the planner's random draws.
     pub seed: u64,
     /// The solver `make_solver` builds (default `auto`, issue 5).
@@ -80,6 +84,7 @@ impl Default for ServiceConfig {
             replan_threshold_s: 120.0,
             cut_at_deadline: true,
             reserve_s: DEFAULT_RESERVE_S,
+            arrival_allowance_s: [0.0; MAX_NODES],
             seed: 1,
             algorithm: Algorithm::Auto,
             fingerprint: 0,
@@ -473,7 +478,8 @@ impl PlannerCore {
         }
         let (start, budget, excluded) = self.planning_frame();
         let (rest, i) = self.remaining_plan()?;
-        if fill_problem(&self.snapshot, &mut self.problem, start, excluded, budget).is_err() {
+        let allowance = &self.cfg.arrival_allowance_s;
+        if fill_problem(&self.snapshot, &mut self.problem, start, excluded, budget, allowance).is_err() {
             return Some(TriggerKind::EdgeLost);
         }
         let Some(e) = self.problem.evaluate(&rest) else {
@@ -498,7 +504,8 @@ impl PlannerCore {
         let (start, budget, excluded) = self.planning_frame();
         let answered = (self.vehicle.session, self.vehicle.seq);
         let epoch = self.snapshot.epoch;
-        if let Err(e) = fill_problem(&self.snapshot, &mut self.problem, start, excluded, budget) {
+        let allowance = &self.cfg.arrival_allowance_s;
+        if let Err(e) = fill_problem(&self.snapshot, &mut self.problem, start, excluded, budget, allowance) {
             self.counters.unplannable += 1;
             self.answered_state = answered;
             self.answered_epoch = epoch;
