@@ -123,7 +123,7 @@ pub fn key_id(key: f64) -> usize {
 /// there is none. Branch-free over fixed blocks (the comparison becomes a
 /// bit mask ANDed onto the key), so it vectorises.
 #[inline(always)]
-fn best_key(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64, len: usize) -> f64 {
+fn best_key(reach: &[f64], key: &[f64; MAX_NODES], slack: f64, len: usize) -> f64 {
     let mut acc = [0.0f64; SCAN_BLOCK];
     for (r, k) in reach[..len]
         .chunks_exact(SCAN_BLOCK)
@@ -158,21 +158,15 @@ fn best_key(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64, len: u
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
-fn best_key_avx512(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64, len: usize, visited: u128) -> f64 {
+fn best_key_avx512(reach: &[f64], key: &[f64; MAX_NODES], slack: f64, len: usize, visited: u128) -> f64 {
     use core::arch::x86_64::*;
-    debug_assert!(len <= MAX_NODES && len.is_multiple_of(SCAN_BLOCK));
+    // The loads below rely on this (raw pointers, no bounds checks).
+    assert!(len <= reach.len() && len <= MAX_NODES && len.is_multiple_of(SCAN_BLOCK));
     let s = _mm512_set1_pd(slack);
     // One block: lanes that are free and fit fold into `acc` by max.
     #[inline(always)]
-    fn fold(
-        acc: __m512d,
-        reach: &[f64; MAX_NODES],
-        key: &[f64; MAX_NODES],
-        s: __m512d,
-        base: usize,
-        free: u8,
-    ) -> __m512d {
-        // SAFETY: the caller keeps base + 8 ≤ MAX_NODES, and AVX-512F is
+    fn fold(acc: __m512d, reach: &[f64], key: &[f64; MAX_NODES], s: __m512d, base: usize, free: u8) -> __m512d {
+        // SAFETY: the caller keeps base + 8 ≤ len ≤ both lengths, and AVX-512F is
         // enabled in every caller (this is inlined into one).
         unsafe {
             let r = _mm512_loadu_pd(reach.as_ptr().add(base));
@@ -183,14 +177,18 @@ fn best_key_avx512(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64,
     // Two accumulators (even and odd blocks) halve the max chain's latency.
     let (mut a0, mut a1) = (_mm512_setzero_pd(), _mm512_setzero_pd());
     let mut base = 0;
+    // Shifted by a constant each round: a variable 128-bit shift costs
+    // several instructions per block.
+    let mut rest = visited;
     while base + 2 * SCAN_BLOCK <= len {
-        let free = !(visited >> base) as u16;
+        let free = !(rest as u16);
+        rest >>= 2 * SCAN_BLOCK;
         a0 = fold(a0, reach, key, s, base, free as u8);
         a1 = fold(a1, reach, key, s, base + SCAN_BLOCK, (free >> 8) as u8);
         base += 2 * SCAN_BLOCK;
     }
     if base < len {
-        a0 = fold(a0, reach, key, s, base, !(visited >> base) as u8);
+        a0 = fold(a0, reach, key, s, base, !(rest as u8));
     }
     _mm512_reduce_max_pd(_mm512_max_pd(a0, a1))
 }
@@ -479,14 +477,23 @@ impl Decoder {
             return;
         }
         let next = key_id(best);
+        // The time comes from the compact time table: it is the one figure
+        // the next step waits for.
+        let t = p.time_s(w.cur, next);
         let edge = p.edge(w.cur, next);
-        let e = &mut w.e;
-        e.time_s += edge.time_s;
-        e.distance_m += edge.distance_m;
-        e.weight += edge.gain;
-        e.risk_ratio_sum += edge.risk_ratio;
-        e.tasks += 1;
-        self.prefix[out.len()] = *e;
+        // Built field by field from values in hand and stored whole: an
+        // in-place update followed by a copy makes the copy's wide loads
+        // wait on the narrow stores (a failed store-to-load forward).
+        let e = RouteEval {
+            time_s: w.e.time_s + t,
+            distance_m: w.e.distance_m + edge.distance_m,
+            weight: w.e.weight + edge.gain,
+            risk_ratio_sum: w.e.risk_ratio_sum + edge.risk_ratio,
+            tasks: w.e.tasks + 1,
+            feasible: false,
+        };
+        w.e = e;
+        self.prefix[out.len()] = e;
         out.push(next);
         w.visited |= 1 << next;
         if !AVX512 {
