@@ -31,8 +31,14 @@
 //!   the same max, so routes do not depend on the machine (tests hold them
 //!   equal).
 //! - [`Decoder::decode_pair`] advances two walks in lock-step so the core
-//!   overlaps their serial scan → pick → next-row chains; the solvers decode
-//!   in pairs.
+//!   overlaps their serial scan → pick → next-row chains;
+//!   [`Decoder::decode_rows`] does the same over a whole batch, starting the
+//!   next vector on a decoder as soon as its walk ends (the PSO decodes its
+//!   swarm this way, BBO in pairs).
+//! - A step carries only the route's time (the next step's slack needs
+//!   it); distance, weight, risk and tasks are summed once the route is
+//!   known, in the same order, so the figures are bit-for-bit those of a
+//!   step-by-step sum.
 //! - The repair runs, per cut point, an A* search with the look-ahead's
 //!   shortest time home as heuristic, pruned by the time left, so it only
 //!   explores near-quickest paths (`Decoder::repair`).
@@ -397,7 +403,8 @@ fn walk_rows_avx2<P: Priority>(
 pub struct Decoder {
     /// Packed priority keys of the decode in hand; 0 for visited nodes.
     key: [f64; MAX_NODES],
-    /// Figures of the route's first i edges, for i = 0..len.
+    /// Figures of the route's first i edges, for i = 0..len (filled by
+    /// `sum_figures` when a walk needs repair).
     prefix: [RouteEval; MAX_NODES],
     /// Repair's A* search (see [`Decoder::astar_home`]).
     open: [f64; MAX_NODES],
@@ -571,7 +578,6 @@ impl Decoder {
             weight: p.prize(cur),
             ..RouteEval::default()
         };
-        self.prefix[0] = e;
         Walk {
             cur,
             visited: 1u128 << cur,
@@ -604,23 +610,9 @@ impl Decoder {
             return;
         }
         let next = key_id(best);
-        // The time comes from the compact time table: it is the one figure
-        // the next step waits for.
-        let t = p.time_s(w.cur, next);
-        let edge = p.edge(w.cur, next);
-        // Built field by field from values in hand and stored whole: an
-        // in-place update followed by a copy makes the copy's wide loads
-        // wait on the narrow stores (a failed store-to-load forward).
-        let e = RouteEval {
-            time_s: w.e.time_s + t,
-            distance_m: w.e.distance_m + edge.distance_m,
-            weight: w.e.weight + edge.gain,
-            risk_ratio_sum: w.e.risk_ratio_sum + edge.risk_ratio,
-            tasks: w.e.tasks + 1,
-            feasible: false,
-        };
-        w.e = e;
-        self.prefix[out.len()] = e;
+        // Only the time is kept while walking (the next step waits for it);
+        // the other figures are summed once the route is known (`finish`).
+        w.e.time_s += p.time_s(w.cur, next);
         out.push(next);
         w.visited |= 1 << next;
         if !AVX512 {
@@ -636,9 +628,41 @@ impl Decoder {
         if w.dead_end {
             return self.repair(p, out);
         }
-        let mut e = w.e;
-        e.feasible = e.time_s <= p.budget_limit_s();
+        let e = self.sum_figures::<false>(p, out);
+        debug_assert_eq!(e.time_s.to_bits(), w.e.time_s.to_bits());
+        let e = RouteEval {
+            feasible: e.time_s <= p.budget_limit_s(),
+            ..e
+        };
         debug_assert_eq!(p.evaluate(out), Some(e));
+        e
+    }
+
+    /// Sums the figures of `out` edge by edge in route order (the order,
+    /// and so the rounding, of a walk accumulating them step by step) and
+    /// returns them, not marked feasible; with `PREFIX`, also stores the
+    /// figures of the first i edges in `prefix[i]` for every i.
+    #[inline(always)]
+    fn sum_figures<const PREFIX: bool>(&mut self, p: &Problem, out: &Route) -> RouteEval {
+        let nodes = out.as_bytes();
+        let mut e = RouteEval {
+            weight: p.prize(usize::from(nodes[0])),
+            ..RouteEval::default()
+        };
+        if PREFIX {
+            self.prefix[0] = e;
+        }
+        for (i, hop) in nodes.windows(2).enumerate() {
+            let step = p.edge(usize::from(hop[0]), usize::from(hop[1]));
+            e.time_s += step.time_s;
+            e.distance_m += step.distance_m;
+            e.weight += step.gain;
+            e.risk_ratio_sum += step.risk_ratio;
+            e.tasks += 1;
+            if PREFIX {
+                self.prefix[i + 1] = e;
+            }
+        }
         e
     }
 
@@ -654,6 +678,7 @@ impl Decoder {
     /// only near-quickest paths.
     #[inline(always)]
     fn repair(&mut self, p: &Problem, out: &mut Route) -> RouteEval {
+        self.sum_figures::<true>(p, out);
         let limit = p.budget_limit_s();
         let len = padded_len(p.n());
         let mut cut = None;
