@@ -505,7 +505,7 @@ impl Decoder {
     /// `vectors[i * stride..]` (at least `p.n()` values), its route goes to
     /// `routes[i]` and its figures to `evals[i]`, for every `i <
     /// evals.len()`. Each result is exactly `self.decode` of that vector;
-    /// the two walks stay overlapped across vectors (see [`walk_rows`]).
+    /// the two walks stay overlapped across vectors.
     /// Does not allocate.
     ///
     /// # Panics
