@@ -31,10 +31,8 @@
 //!   the same max, so routes do not depend on the machine (tests hold them
 //!   equal).
 //! - [`Decoder::decode_pair`] advances two walks in lock-step so the core
-//!   overlaps their serial scan → pick → next-row chains;
-//!   [`Decoder::decode_rows`] does the same over a whole batch, starting the
-//!   next vector on a decoder as soon as its walk ends (the PSO decodes its
-//!   swarm this way, BBO in pairs).
+//!   overlaps their serial scan → pick → next-row chains; the solvers decode
+//!   in pairs.
 //! - A step carries only the route's time (the next step's slack needs
 //!   it); distance, weight, risk and tasks are summed once the route is
 //!   known, in the same order, so the figures are bit-for-bit those of a
@@ -305,100 +303,6 @@ fn walk_pair_avx2<P: Priority>(
     walk_pair::<false, P>(da, db, p, a, b, out_a, out_b)
 }
 
-/// Decodes vector `i` (`vectors[i * stride..][..n]`) into `routes[i]` and
-/// `evals[i]` for every `i < evals.len()`, two walks in lock-step like
-/// [`walk_pair`], but a walk that ends hands its decoder to the next vector
-/// at once instead of waiting for its partner, so the two chains stay
-/// overlapped until the last vector (no single-walk tail per pair).
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn walk_rows<const AVX512: bool, P: Priority>(
-    da: &mut Decoder,
-    db: &mut Decoder,
-    p: &Problem,
-    vectors: &[P],
-    stride: usize,
-    routes: &mut [Route],
-    evals: &mut [RouteEval],
-) {
-    let (n, count) = (p.n(), evals.len());
-    let row = |i: usize| &vectors[i * stride..i * stride + n];
-    if count < 2 {
-        if count == 1 {
-            evals[0] = da.walk::<AVX512, P>(p, row(0), &mut routes[0]);
-        }
-        return;
-    }
-    let (mut ia, mut ib, mut next) = (0, 1, 2);
-    let mut wa = da.begin::<AVX512, P>(p, row(0), &mut routes[0]);
-    let mut wb = db.begin::<AVX512, P>(p, row(1), &mut routes[1]);
-    loop {
-        if wa.running {
-            da.step::<AVX512>(p, &mut wa, &mut routes[ia]);
-        }
-        if wb.running {
-            db.step::<AVX512>(p, &mut wb, &mut routes[ib]);
-        }
-        if !wa.running {
-            evals[ia] = da.finish(p, &wa, &mut routes[ia]);
-            if next == count {
-                // No vector left for `a`: `b` finishes alone.
-                while wb.running {
-                    db.step::<AVX512>(p, &mut wb, &mut routes[ib]);
-                }
-                evals[ib] = db.finish(p, &wb, &mut routes[ib]);
-                return;
-            }
-            ia = next;
-            next += 1;
-            wa = da.begin::<AVX512, P>(p, row(ia), &mut routes[ia]);
-        }
-        if !wb.running {
-            evals[ib] = db.finish(p, &wb, &mut routes[ib]);
-            if next == count {
-                while wa.running {
-                    da.step::<AVX512>(p, &mut wa, &mut routes[ia]);
-                }
-                evals[ia] = da.finish(p, &wa, &mut routes[ia]);
-                return;
-            }
-            ib = next;
-            next += 1;
-            wb = db.begin::<AVX512, P>(p, row(ib), &mut routes[ib]);
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-#[allow(clippy::too_many_arguments)]
-fn walk_rows_avx512<P: Priority>(
-    da: &mut Decoder,
-    db: &mut Decoder,
-    p: &Problem,
-    vectors: &[P],
-    stride: usize,
-    routes: &mut [Route],
-    evals: &mut [RouteEval],
-) {
-    walk_rows::<true, P>(da, db, p, vectors, stride, routes, evals)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-fn walk_rows_avx2<P: Priority>(
-    da: &mut Decoder,
-    db: &mut Decoder,
-    p: &Problem,
-    vectors: &[P],
-    stride: usize,
-    routes: &mut [Route],
-    evals: &mut [RouteEval],
-) {
-    walk_rows::<false, P>(da, db, p, vectors, stride, routes, evals)
-}
-
 /// Scratch space for decoding; build once, reuse for every decode.
 pub struct Decoder {
     /// Packed priority keys of the decode in hand; 0 for visited nodes.
@@ -498,39 +402,6 @@ impl Decoder {
             // SAFETY: `detect` only yields Avx2 on CPUs with AVX2.
             Kernel::Avx2 => unsafe { walk_pair_avx2(self, other, p, a, b, out_a, out_b) },
             _ => walk_pair::<false, P>(self, other, p, a, b, out_a, out_b),
-        }
-    }
-
-    /// Decodes a batch with this decoder and `other`: vector `i` is
-    /// `vectors[i * stride..]` (at least `p.n()` values), its route goes to
-    /// `routes[i]` and its figures to `evals[i]`, for every `i <
-    /// evals.len()`. Each result is exactly `self.decode` of that vector;
-    /// the two walks stay overlapped across vectors.
-    /// Does not allocate.
-    ///
-    /// # Panics
-    /// If `stride < p.n()`, `routes` is shorter than `evals`, or `vectors`
-    /// holds fewer than `evals.len()` rows.
-    pub fn decode_rows<P: Priority>(
-        &mut self,
-        other: &mut Decoder,
-        p: &Problem,
-        vectors: &[P],
-        stride: usize,
-        routes: &mut [Route],
-        evals: &mut [RouteEval],
-    ) {
-        let count = evals.len();
-        assert!(stride >= p.n() && routes.len() >= count);
-        assert!(count == 0 || vectors.len() >= (count - 1) * stride + p.n());
-        match Kernel::detect() {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `detect` only yields Avx512 on CPUs with AVX-512F.
-            Kernel::Avx512 => unsafe { walk_rows_avx512(self, other, p, vectors, stride, routes, evals) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `detect` only yields Avx2 on CPUs with AVX2.
-            Kernel::Avx2 => unsafe { walk_rows_avx2(self, other, p, vectors, stride, routes, evals) },
-            _ => walk_rows::<false, P>(self, other, p, vectors, stride, routes, evals),
         }
     }
 
@@ -1148,17 +1019,16 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(96))]
-        /// Batches (the solvers' path): every vector of a batch decodes
-        /// exactly as on its own and as the plain rule says, on dense
-        /// networks and with many exact ties (walls, repeated values),
-        /// NaN and infinities, in `f32` as the PSO keeps them.
+        /// Dense networks with many exact ties (walls, repeated values),
+        /// NaN and infinities, in `f32` as the PSO keeps them: single and
+        /// paired decodes give the plain rule's route.
         #[test]
-        fn batches_decode_like_single_vectors_and_the_plain_rule(
+        fn tied_f32_vectors_on_dense_networks_decode_like_the_plain_rule(
             seed in 0u64..10_000,
             n in 2usize..=MAX_NODES,
             density in 0.3f64..1.0,
             budget in 1_000.0f64..60_000.0,
-            count in 0usize..8,
+            count in 1usize..8,
             raw in proptest::collection::vec(
                 prop_oneof![
                     4 => -200.0f32..100.0,
@@ -1180,16 +1050,18 @@ mod tests {
             }
             let p = Problem::from_instance(&inst).unwrap();
             let stride = padded_len(n);
-            let mut routes = vec![Route::new(); count];
-            let mut evals = vec![RouteEval::default(); count];
-            Decoder::new().decode_rows(&mut Decoder::new(), &p, &raw, stride, &mut routes, &mut evals);
             let mut single = Decoder::new();
+            let (mut da, mut db) = (Decoder::new(), Decoder::new());
             for i in 0..count {
                 let row = &raw[i * stride..i * stride + n];
                 let mut r = Route::new();
                 let e = single.decode(&p, row, &mut r);
-                prop_assert_eq!(routes[i].as_bytes(), r.as_bytes(), "vector {}", i);
-                prop_assert_eq!(evals[i], e);
+                // Paired with the next vector (or itself for the last).
+                let other = &raw[((i + 1) % count) * stride..][..n];
+                let (mut pa, mut pb) = (Route::new(), Route::new());
+                let (ea, _) = da.decode_pair(&mut db, &p, row, other, &mut pa, &mut pb);
+                prop_assert_eq!(pa.as_bytes(), r.as_bytes(), "vector {}", i);
+                prop_assert_eq!(ea, e);
                 let wide: Vec<f64> = row.iter().map(|&x| f64::from(x)).collect();
                 prop_assert_eq!(reference_decode(&p, &wide), r.to_vec());
             }

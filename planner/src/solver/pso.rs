@@ -132,13 +132,9 @@ pub(crate) fn unit24(u: u64) -> f32 {
 /// A PSO solver with every buffer allocated up front.
 pub struct Pso {
     settings: PsoSettings,
-    /// Two decoders, so particles decode two at a time
-    /// ([`Decoder::decode_rows`]).
+    /// Two decoders, so particles decode in pairs.
     decoder: Decoder,
     decoder_b: Decoder,
-    /// Each particle's route and figures from the last evaluation.
-    routes: Vec<Route>,
-    evals: Vec<RouteEval>,
     lanes: LaneRng,
     /// Node count of the current problem and its padded row length.
     n: usize,
@@ -153,6 +149,9 @@ pub struct Pso {
     gbest: Vec<f32>,
     /// Random words for the row being updated (one per dimension).
     bits: Vec<u64>,
+    /// Decoding targets for the particle pair in hand.
+    scratch: Route,
+    scratch_b: Route,
     best: Route,
     best_eval: RouteEval,
     /// Particle whose personal best is `best` (its position is `gbest`).
@@ -174,8 +173,6 @@ impl Pso {
             settings,
             decoder: Decoder::new(),
             decoder_b: Decoder::new(),
-            routes: vec![Route::new(); settings.particles],
-            evals: vec![RouteEval::default(); settings.particles],
             lanes: LaneRng::new(),
             n: 0,
             stride: 0,
@@ -185,6 +182,8 @@ impl Pso {
             pbest_eval: vec![RouteEval::default(); settings.particles],
             gbest: vec![0.0; MAX_NODES],
             bits: vec![0; MAX_NODES],
+            scratch: Route::new(),
+            scratch_b: Route::new(),
             best: Route::new(),
             best_eval: RouteEval::default(),
             best_particle: 0,
@@ -214,12 +213,37 @@ impl Pso {
         (VELOCITY_CLAMP_FRACTION * (PRIORITY_MAX - PRIORITY_MIN)) as f32
     }
 
-    /// Updates particle `i`'s personal best with its decoded figures
-    /// (`evals[i]`, route `routes[i]`) and the best-so-far, each on strict
-    /// improvement; `true` when the best-so-far improved.
+    /// Decodes particles `i` and `i + 1` together (see
+    /// [`Decoder::decode_pair`]), then takes their results in order.
     #[inline(always)]
-    fn take(&mut self, problem: &Problem, i: usize) -> bool {
-        let e = self.evals[i];
+    fn evaluate_pair(&mut self, problem: &Problem, i: usize) -> bool {
+        let s = self.stride;
+        let (first, second) = self.x[i * s..(i + 2) * s].split_at(s);
+        let (ea, eb) = self.decoder.decode_pair(
+            &mut self.decoder_b,
+            problem,
+            first,
+            second,
+            &mut self.scratch,
+            &mut self.scratch_b,
+        );
+        let improved = self.take(problem, i, ea, false);
+        self.take(problem, i + 1, eb, true) | improved
+    }
+
+    /// Decodes particle `i` alone.
+    #[inline(always)]
+    fn evaluate(&mut self, problem: &Problem, i: usize) -> bool {
+        let row = i * self.stride..(i + 1) * self.stride;
+        let e = self.decoder.decode(problem, &self.x[row], &mut self.scratch);
+        self.take(problem, i, e, false)
+    }
+
+    /// Updates particle `i`'s personal best with its decoded figures `e`
+    /// (route in `scratch_b` if `second`, else `scratch`) and the
+    /// best-so-far, each on strict improvement.
+    #[inline(always)]
+    fn take(&mut self, problem: &Problem, i: usize, e: RouteEval, second: bool) -> bool {
         if !problem.better(&e, &self.pbest_eval[i]) {
             return false;
         }
@@ -227,7 +251,7 @@ impl Pso {
         self.pbest[row.clone()].copy_from_slice(&self.x[row]);
         self.pbest_eval[i] = e;
         if problem.better(&e, &self.best_eval) {
-            self.best = self.routes[i];
+            self.best = if second { self.scratch_b } else { self.scratch };
             self.best_eval = e;
             self.best_particle = i;
             return true;
@@ -253,22 +277,18 @@ impl Pso {
         self.refresh_gbest();
     }
 
-    /// Decodes every particle, then takes the results in particle order
-    /// (decoding reads only positions, so this equals taking each result
-    /// as it is decoded); `true` when the best-so-far improved.
+    /// Decodes every particle (in pairs) and takes the results in order;
+    /// `true` when the best-so-far improved.
     fn evaluate_all(&mut self, problem: &Problem) -> bool {
-        let particles = self.settings.particles;
-        self.decoder.decode_rows(
-            &mut self.decoder_b,
-            problem,
-            &self.x,
-            self.stride,
-            &mut self.routes[..particles],
-            &mut self.evals[..particles],
-        );
         let mut improved = false;
-        for i in 0..particles {
-            improved |= self.take(problem, i);
+        let particles = self.settings.particles;
+        let mut i = 0;
+        while i + 1 < particles {
+            improved |= self.evaluate_pair(problem, i);
+            i += 2;
+        }
+        if i < particles {
+            improved |= self.evaluate(problem, i);
         }
         improved
     }
