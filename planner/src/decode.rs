@@ -33,6 +33,10 @@
 //! - [`Decoder::decode_pair`] advances two walks in lock-step so the core
 //!   overlaps their serial scan → pick → next-row chains; the solvers decode
 //!   in pairs.
+//! - A step carries only the route's time (the next step's slack needs
+//!   it); distance, weight, risk and tasks are summed once the route is
+//!   known, in the same order, so the figures are bit-for-bit those of a
+//!   step-by-step sum.
 //! - The repair runs, per cut point, an A* search with the look-ahead's
 //!   shortest time home as heuristic, pruned by the time left, so it only
 //!   explores near-quickest paths (`Decoder::repair`).
@@ -123,7 +127,7 @@ pub fn key_id(key: f64) -> usize {
 /// there is none. Branch-free over fixed blocks (the comparison becomes a
 /// bit mask ANDed onto the key), so it vectorises.
 #[inline(always)]
-fn best_key(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64, len: usize) -> f64 {
+fn best_key(reach: &[f64], key: &[f64; MAX_NODES], slack: f64, len: usize) -> f64 {
     let mut acc = [0.0f64; SCAN_BLOCK];
     for (r, k) in reach[..len]
         .chunks_exact(SCAN_BLOCK)
@@ -158,21 +162,15 @@ fn best_key(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64, len: u
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
-fn best_key_avx512(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64, len: usize, visited: u128) -> f64 {
+fn best_key_avx512(reach: &[f64], key: &[f64; MAX_NODES], slack: f64, len: usize, visited: u128) -> f64 {
     use core::arch::x86_64::*;
-    debug_assert!(len <= MAX_NODES && len.is_multiple_of(SCAN_BLOCK));
+    // The loads below rely on this (raw pointers, no bounds checks).
+    assert!(len <= reach.len() && len <= MAX_NODES && len.is_multiple_of(SCAN_BLOCK));
     let s = _mm512_set1_pd(slack);
     // One block: lanes that are free and fit fold into `acc` by max.
     #[inline(always)]
-    fn fold(
-        acc: __m512d,
-        reach: &[f64; MAX_NODES],
-        key: &[f64; MAX_NODES],
-        s: __m512d,
-        base: usize,
-        free: u8,
-    ) -> __m512d {
-        // SAFETY: the caller keeps base + 8 ≤ MAX_NODES, and AVX-512F is
+    fn fold(acc: __m512d, reach: &[f64], key: &[f64; MAX_NODES], s: __m512d, base: usize, free: u8) -> __m512d {
+        // SAFETY: the caller keeps base + 8 ≤ len ≤ both lengths, and AVX-512F is
         // enabled in every caller (this is inlined into one).
         unsafe {
             let r = _mm512_loadu_pd(reach.as_ptr().add(base));
@@ -183,14 +181,18 @@ fn best_key_avx512(reach: &[f64; MAX_NODES], key: &[f64; MAX_NODES], slack: f64,
     // Two accumulators (even and odd blocks) halve the max chain's latency.
     let (mut a0, mut a1) = (_mm512_setzero_pd(), _mm512_setzero_pd());
     let mut base = 0;
+    // Shifted by a constant each round: a variable 128-bit shift costs
+    // several instructions per block.
+    let mut rest = visited;
     while base + 2 * SCAN_BLOCK <= len {
-        let free = !(visited >> base) as u16;
+        let free = !(rest as u16);
+        rest >>= 2 * SCAN_BLOCK;
         a0 = fold(a0, reach, key, s, base, free as u8);
         a1 = fold(a1, reach, key, s, base + SCAN_BLOCK, (free >> 8) as u8);
         base += 2 * SCAN_BLOCK;
     }
     if base < len {
-        a0 = fold(a0, reach, key, s, base, !(visited >> base) as u8);
+        a0 = fold(a0, reach, key, s, base, !(rest as u8));
     }
     _mm512_reduce_max_pd(_mm512_max_pd(a0, a1))
 }
@@ -305,7 +307,8 @@ fn walk_pair_avx2<P: Priority>(
 pub struct Decoder {
     /// Packed priority keys of the decode in hand; 0 for visited nodes.
     key: [f64; MAX_NODES],
-    /// Figures of the route's first i edges, for i = 0..len.
+    /// Figures of the route's first i edges, for i = 0..len (filled by
+    /// `sum_figures` when a walk needs repair).
     prefix: [RouteEval; MAX_NODES],
     /// Repair's A* search (see [`Decoder::astar_home`]).
     open: [f64; MAX_NODES],
@@ -446,7 +449,6 @@ impl Decoder {
             weight: p.prize(cur),
             ..RouteEval::default()
         };
-        self.prefix[0] = e;
         Walk {
             cur,
             visited: 1u128 << cur,
@@ -479,14 +481,9 @@ impl Decoder {
             return;
         }
         let next = key_id(best);
-        let edge = p.edge(w.cur, next);
-        let e = &mut w.e;
-        e.time_s += edge.time_s;
-        e.distance_m += edge.distance_m;
-        e.weight += edge.gain;
-        e.risk_ratio_sum += edge.risk_ratio;
-        e.tasks += 1;
-        self.prefix[out.len()] = *e;
+        // Only the time is kept while walking (the next step waits for it);
+        // the other figures are summed once the route is known (`finish`).
+        w.e.time_s += p.time_s(w.cur, next);
         out.push(next);
         w.visited |= 1 << next;
         if !AVX512 {
@@ -502,9 +499,41 @@ impl Decoder {
         if w.dead_end {
             return self.repair(p, out);
         }
-        let mut e = w.e;
-        e.feasible = e.time_s <= p.budget_limit_s();
+        let e = self.sum_figures::<false>(p, out);
+        debug_assert_eq!(e.time_s.to_bits(), w.e.time_s.to_bits());
+        let e = RouteEval {
+            feasible: e.time_s <= p.budget_limit_s(),
+            ..e
+        };
         debug_assert_eq!(p.evaluate(out), Some(e));
+        e
+    }
+
+    /// Sums the figures of `out` edge by edge in route order (the order,
+    /// and so the rounding, of a walk accumulating them step by step) and
+    /// returns them, not marked feasible; with `PREFIX`, also stores the
+    /// figures of the first i edges in `prefix[i]` for every i.
+    #[inline(always)]
+    fn sum_figures<const PREFIX: bool>(&mut self, p: &Problem, out: &Route) -> RouteEval {
+        let nodes = out.as_bytes();
+        let mut e = RouteEval {
+            weight: p.prize(usize::from(nodes[0])),
+            ..RouteEval::default()
+        };
+        if PREFIX {
+            self.prefix[0] = e;
+        }
+        for (i, hop) in nodes.windows(2).enumerate() {
+            let step = p.edge(usize::from(hop[0]), usize::from(hop[1]));
+            e.time_s += step.time_s;
+            e.distance_m += step.distance_m;
+            e.weight += step.gain;
+            e.risk_ratio_sum += step.risk_ratio;
+            e.tasks += 1;
+            if PREFIX {
+                self.prefix[i + 1] = e;
+            }
+        }
         e
     }
 
@@ -520,6 +549,7 @@ impl Decoder {
     /// only near-quickest paths.
     #[inline(always)]
     fn repair(&mut self, p: &Problem, out: &mut Route) -> RouteEval {
+        self.sum_figures::<true>(p, out);
         let limit = p.budget_limit_s();
         let len = padded_len(p.n());
         let mut cut = None;
@@ -984,6 +1014,57 @@ mod tests {
             prop_assert_eq!(stats.time_s, e.time_s);
             let quickest_fits = p.to_goal_s(p.start()) <= p.budget_limit_s();
             prop_assert_eq!(e.feasible, quickest_fits);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(96))]
+        /// Dense networks with many exact ties (walls, repeated values),
+        /// NaN and infinities, in `f32` as the PSO keeps them: single and
+        /// paired decodes give the plain rule's route.
+        #[test]
+        fn tied_f32_vectors_on_dense_networks_decode_like_the_plain_rule(
+            seed in 0u64..10_000,
+            n in 2usize..=MAX_NODES,
+            density in 0.3f64..1.0,
+            budget in 1_000.0f64..60_000.0,
+            count in 1usize..8,
+            raw in proptest::collection::vec(
+                prop_oneof![
+                    4 => -200.0f32..100.0,
+                    2 => Just(100.0f32),
+                    2 => Just(-200.0f32),
+                    1 => Just(7.5f32),
+                    1 => Just(f32::NAN),
+                    1 => Just(f32::INFINITY),
+                    1 => Just(f32::NEG_INFINITY),
+                ],
+                8 * MAX_NODES,
+            ),
+        ) {
+            let mut inst = random_instance(n, density, budget, seed);
+            for a in 0..n - 1 {
+                if inst.edge_between(a, a + 1).is_none() {
+                    inst.edges.push(Edge { a, b: a + 1, priority: 1.0, risk: 1.0, task_time_s: 0.0 });
+                }
+            }
+            let p = Problem::from_instance(&inst).unwrap();
+            let stride = padded_len(n);
+            let mut single = Decoder::new();
+            let (mut da, mut db) = (Decoder::new(), Decoder::new());
+            for i in 0..count {
+                let row = &raw[i * stride..i * stride + n];
+                let mut r = Route::new();
+                let e = single.decode(&p, row, &mut r);
+                // Paired with the next vector (or itself for the last).
+                let other = &raw[((i + 1) % count) * stride..][..n];
+                let (mut pa, mut pb) = (Route::new(), Route::new());
+                let (ea, _) = da.decode_pair(&mut db, &p, row, other, &mut pa, &mut pb);
+                prop_assert_eq!(pa.as_bytes(), r.as_bytes(), "vector {}", i);
+                prop_assert_eq!(ea, e);
+                let wide: Vec<f64> = row.iter().map(|&x| f64::from(x)).collect();
+                prop_assert_eq!(reference_decode(&p, &wide), r.to_vec());
+            }
         }
     }
 

@@ -12,6 +12,7 @@
 //! `instance-format.md` exactly; [`crate::route::RouteStats::from_instance`]
 //! recomputes them independently and the tests hold the two equal.
 
+use crate::decode::padded_len;
 use crate::instance::{Instance, Objective};
 
 /// Largest network the planner handles. 128 covers the paper's 40-node
@@ -141,22 +142,35 @@ impl EdgeData {
     };
 }
 
-/// Dense per-pair tables, boxed because they are large (768 KiB).
+/// Entries of one dense per-pair table.
+const CELLS: usize = MAX_NODES * MAX_NODES;
+
+/// Dense per-pair tables, boxed because they are large (768 KiB). Each is
+/// row-major with a row stride of `padded_len(n)` (n rounded up to the
+/// decoder's scan block), not `MAX_NODES`, so a small problem's rows sit
+/// together (13 KiB of look-ahead at n = 40 instead of 40 rows spread 1 KiB
+/// apart). Entry (a, b) is at `a * stride + b`.
 struct Tables {
     /// Look-ahead: T_ab + shortest time from b to the goal; +∞ where there is
-    /// no edge or b is excluded (and in every column ≥ n, which the decoder's
-    /// padded scan relies on). A decoder may step to b only if this fits in
-    /// the time left. Scanned whole rows at a time, so kept apart.
-    reach_s: [[f64; MAX_NODES]; MAX_NODES],
+    /// no edge or b is excluded (and in every padding column n..stride,
+    /// which the decoder's padded scan relies on). A decoder may step to b
+    /// only if this fits in the time left. Scanned whole rows at a time, so
+    /// kept apart.
+    reach_s: [f64; CELLS],
     /// Edge time T_ab, s; +∞ where there is no edge. Duplicates
-    /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row.
-    time_s: [[f64; MAX_NODES]; MAX_NODES],
+    /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row, and so
+    /// the decoder's step → time → next step chain loads from this small
+    /// table rather than the 4× larger `edge`.
+    time_s: [f64; CELLS],
     /// Everything a step a → b adds to a route's figures.
-    edge: [[EdgeData; MAX_NODES]; MAX_NODES],
+    edge: [EdgeData; CELLS],
 }
+
 /// One routing problem, ready for the solvers.
 pub struct Problem {
     n: usize,
+    /// Row stride of the tables: `padded_len(n)`.
+    stride: usize,
     start: usize,
     goal: usize,
     budget_s: f64,
@@ -180,12 +194,10 @@ impl Problem {
             // before use by writing the whole value through the raw pointer.
             unsafe {
                 let p = v.as_mut_ptr();
-                for row in 0..MAX_NODES {
-                    for col in 0..MAX_NODES {
-                        (*p).reach_s[row][col] = f64::INFINITY;
-                        (*p).time_s[row][col] = f64::INFINITY;
-                        (*p).edge[row][col] = EdgeData::NONE;
-                    }
+                for cell in 0..CELLS {
+                    (*p).reach_s[cell] = f64::INFINITY;
+                    (*p).time_s[cell] = f64::INFINITY;
+                    (*p).edge[cell] = EdgeData::NONE;
                 }
                 v.set_len(1);
             }
@@ -195,6 +207,7 @@ impl Problem {
         };
         Self {
             n: 0,
+            stride: 0,
             start: 0,
             goal: 0,
             budget_s: 0.0,
@@ -275,16 +288,18 @@ impl Problem {
         if !(budget_s.is_finite() && budget_s > 0.0) {
             return Err(ProblemError::BadBudget(budget_s));
         }
-        // Clear only what the previous fill may have touched.
-        let old_n = self.n.max(n);
-        for row in 0..old_n {
-            self.tables.time_s[row][..old_n].fill(f64::INFINITY);
-            self.tables.reach_s[row][..old_n].fill(f64::INFINITY);
-            self.tables.edge[row][..old_n].fill(EdgeData::NONE);
-            self.adjacency[row] = NodeSet::EMPTY;
-            self.prize[row] = 0.0;
-        }
+        // Clear only what the previous fill may have touched, and what this
+        // one will use (its padding columns must read +∞).
+        let stride = padded_len(n);
+        let used = (self.n * self.stride).max(n * stride);
+        self.tables.time_s[..used].fill(f64::INFINITY);
+        self.tables.reach_s[..used].fill(f64::INFINITY);
+        self.tables.edge[..used].fill(EdgeData::NONE);
+        let rows = self.n.max(n);
+        self.adjacency[..rows].fill(NodeSet::EMPTY);
+        self.prize[..rows].fill(0.0);
         self.n = n;
+        self.stride = stride;
         self.start = start;
         self.goal = goal;
         self.budget_s = budget_s;
@@ -310,9 +325,10 @@ impl Problem {
         let ratio = if priority > 0.0 { risk / priority } else { 0.0 };
         let t = &mut self.tables;
         for (u, v) in [(a, b), (b, a)] {
-            t.time_s[u][v] = time_s;
+            let cell = u * self.stride + v;
+            t.time_s[cell] = time_s;
             // Prizes are added to the gain in `finish`, once every prize is known.
-            t.edge[u][v] = EdgeData {
+            t.edge[cell] = EdgeData {
                 time_s,
                 distance_m,
                 gain: weight,
@@ -325,16 +341,17 @@ impl Problem {
     /// Completes a fill: adds prizes to the gain table and computes the
     /// shortest time to the goal and the look-ahead table.
     pub fn finish(&mut self) -> Result<(), ProblemError> {
-        let n = self.n;
+        let (n, stride) = (self.n, self.stride);
         for u in 0..n {
             for v in self.adjacency[u].iter() {
-                self.tables.edge[u][v].gain += self.prize[v];
+                self.tables.edge[u * stride + v].gain += self.prize[v];
             }
         }
         self.shortest_times_to_goal();
         for u in 0..n {
             for v in 0..n {
-                self.tables.reach_s[u][v] = self.tables.time_s[u][v] + self.to_goal_s[v];
+                let cell = u * stride + v;
+                self.tables.reach_s[cell] = self.tables.time_s[cell] + self.to_goal_s[v];
             }
         }
         if !self.to_goal_s[self.start].is_finite() {
@@ -366,7 +383,7 @@ impl Problem {
             }
             done.insert(u);
             for v in self.adjacency[u].iter() {
-                let cand = best + self.tables.time_s[u][v];
+                let cand = best + self.tables.time_s[u * self.stride + v];
                 if cand < self.to_goal_s[v] {
                     self.to_goal_s[v] = cand;
                 }
@@ -420,25 +437,31 @@ impl Problem {
     pub fn has_edge(&self, a: usize, b: usize) -> bool {
         self.adjacency[a].contains(b)
     }
+    /// Row stride of the dense tables (`padded_len(n)`): the length of
+    /// [`Problem::reach_row`] and [`Problem::time_row`].
+    #[inline]
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
     /// Edge time, s (+∞ when no edge).
     #[inline]
     pub fn time_s(&self, a: usize, b: usize) -> f64 {
-        self.tables.time_s[a][b]
+        self.tables.time_s[a * self.stride + b]
     }
     /// Edge length, m.
     #[inline]
     pub fn distance_m(&self, a: usize, b: usize) -> f64 {
-        self.tables.edge[a][b].distance_m
+        self.edge(a, b).distance_m
     }
     /// Weight gained by travelling a→b: the edge's ρ/ξ plus b's prize.
     #[inline]
     pub fn gain(&self, a: usize, b: usize) -> f64 {
-        self.tables.edge[a][b].gain
+        self.edge(a, b).gain
     }
     /// ξ/ρ of the edge's task (0 when ρ = 0).
     #[inline]
     pub fn risk_ratio(&self, a: usize, b: usize) -> f64 {
-        self.tables.edge[a][b].risk_ratio
+        self.edge(a, b).risk_ratio
     }
     /// Prize of node `i`.
     #[inline]
@@ -456,20 +479,22 @@ impl Problem {
     pub(crate) fn to_goal_row(&self) -> &[f64; MAX_NODES] {
         &self.to_goal_s
     }
-    /// Row `u` of the look-ahead table (first `n` entries meaningful).
+    /// Row `u` (< n) of the look-ahead table: [`Problem::stride`] entries,
+    /// +∞ in the padding columns n..stride.
     #[inline]
-    pub fn reach_row(&self, u: usize) -> &[f64; MAX_NODES] {
-        &self.tables.reach_s[u]
+    pub fn reach_row(&self, u: usize) -> &[f64] {
+        &self.tables.reach_s[u * self.stride..(u + 1) * self.stride]
     }
     /// Everything the step `a → b` adds to a route (one cache line).
     #[inline]
     pub(crate) fn edge(&self, a: usize, b: usize) -> &EdgeData {
-        &self.tables.edge[a][b]
+        &self.tables.edge[a * self.stride + b]
     }
-    /// Row `u` of the edge-time table.
+    /// Row `u` (< n) of the edge-time table: [`Problem::stride`] entries,
+    /// +∞ in the padding columns.
     #[inline]
-    pub fn time_row(&self, u: usize) -> &[f64; MAX_NODES] {
-        &self.tables.time_s[u]
+    pub fn time_row(&self, u: usize) -> &[f64] {
+        &self.tables.time_s[u * self.stride..(u + 1) * self.stride]
     }
 }
 
