@@ -22,10 +22,11 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use heapless::spsc::Queue;
 
+use super::journal::JournalSummary;
 use super::log::lines;
 use super::report::Report;
 use super::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
-use crate::msg::{FromCode, Outcome, RejectCounters, VehicleState};
+use crate::msg::{Outcome, RejectCounters, VehicleState};
 use crate::plot::{BoundMarker, MapFigure, PlotError, RouteLayer, map_figure};
 use crate::service::alloc;
 use crate::service::cli::{ServeError, ServiceArgs, make_solver, open_ports, prepare_service_thread};
@@ -400,6 +401,14 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         vehicle_args.extend(["--time-scale".into(), a.time_scale.to_string()]);
     }
     vehicle_args.extend(["--answer-timeout-s".into(), a.answer_timeout_s.to_string()]);
+    // The vehicle's journal is the record of what happened; a fresh run
+    // starts a fresh one (an old one would be resumed).
+    let journal_path = out.join("journal.jsonl");
+    match std::fs::remove_file(&journal_path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&journal_path, e)),
+        _ => {}
+    }
+    vehicle_args.extend(["--journal".into(), journal_path.display().to_string()]);
     let mut kids = [
         Kid::spawn("sensor-sim", &common, &out)?,
         Kid::spawn("vehicle-sim", &vehicle_args, &out)?,
@@ -515,33 +524,22 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         return Err(MissionError::Child(e));
     }
     let last = service.last_state;
-    let outcome = match (service.exit, last) {
-        (ExitReason::Finished, Some(s)) => Outcome::from_code(s.outcome).unwrap_or(Outcome::Running),
+    // What happened is what the vehicle's journal says.
+    let journal = JournalSummary::read(&journal_path).map_err(|e| MissionError::Child(e.to_string()))?;
+    let outcome = match (service.exit, journal.outcome()) {
+        (ExitReason::Finished, Some(o)) => o,
         _ => Outcome::Aborted,
     };
-    let (route, tasks, weight, distance, t_used, rejected_by_vehicle) = match last {
-        Some(s) => (
-            crate::msg::route_ids(&s.route, s.route_len)
-                .iter()
-                .map(|&b| b as usize)
-                .collect(),
-            s.tasks_completed,
-            s.weight,
-            s.distance_m,
-            s.header.mission_time_s,
-            s.plans_rejected,
-        ),
-        None => (Vec::new(), 0, 0.0, 0.0, 0.0, 0),
-    };
+    let rejected_by_vehicle = last.map_or(0, |s| s.plans_rejected);
     let c = service.counters;
     let report = Report {
         outcome,
-        time_used_s: t_used,
+        time_used_s: journal.time_s(),
         time_available_s: budget,
-        tasks_completed: tasks,
-        weight,
-        distance_m: distance,
-        route,
+        tasks_completed: journal.tasks(),
+        weight: journal.weight(),
+        distance_m: journal.distance_m(),
+        route: journal.route(),
         plans: c.plans,
         latency_us: service.latency_us,
         deadline_ms: cfg.deadline.as_secs_f64() * 1000.0,
