@@ -314,3 +314,60 @@ fn bench_latency_reports_both_distributions_as_json() {
     assert_eq!(v["planner"]["steady_state_allocations"], 0, "{v:#}");
     assert_eq!(v["shm_leftovers"], 0);
 }
+
+#[test]
+fn killed_and_paused_processes_are_restarted_or_detected_and_the_report_adds_up() {
+    let _shared = shared();
+    // Fault seed 3 on this scenario: the planner killed once, the vehicle
+    // killed three times, the sensor paused twice (drawn from the seed).
+    let out = temp_dir("f");
+    let p = prefix("t");
+    let out_s = out.display().to_string();
+    let o = run(
+        &binary("planner"),
+        &[
+            "mission",
+            "--quiet",
+            "--faults",
+            "6",
+            "--fault-seed",
+            "3",
+            "--nodes",
+            "12",
+            "--seed",
+            "2",
+            "--time-scale",
+            "3000",
+            "--stall-timeout-ms",
+            "600",
+            "--ipc-prefix",
+            &p,
+            "--out",
+            &out_s,
+        ],
+        LIMIT,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_json(&out.join("report.json"));
+    assert!(r["outcome"] == "goal_reached" || r["outcome"] == "timed_out", "{r:#}");
+    assert_report_matches_journal(&r, &out);
+    let f = &r["faults"];
+    assert_eq!(f["planned"], 6, "{f:#}");
+    assert_eq!(f["injected"], 6, "{f:#}");
+    // Every fault injected was cleared: restarted processes were heard from
+    // again, paused ones were detected and heard from again.
+    assert_eq!(f["injected_by_kind"], f["survived_by_kind"], "{f:#}");
+    for key in ["kill_planner", "kill_vehicle-sim", "pause_sensor-sim"] {
+        assert!(f["injected_by_kind"][key].as_u64().unwrap_or(0) > 0, "{key}: {f:#}");
+    }
+    let pauses = f["injected_by_kind"]["pause_sensor-sim"].as_u64().unwrap();
+    assert!(f["stalls_detected"]["sensor-sim"].as_u64().unwrap() >= pauses, "{f:#}");
+    // Each restarted vehicle resumed from the journal.
+    assert_eq!(r["vehicle_restarts"], f["restarts"]["vehicle-sim"], "{r:#}");
+    let planners = f["restarts"]["planner"].as_u64().unwrap();
+    assert!(planners >= 1);
+    assert_eq!(r["shm_files_left"], 0);
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+    let flog = std::fs::read_to_string(out.join("faults.log")).unwrap();
+    assert!(flog.contains("\"stall_detected\""), "{flog}");
+}

@@ -37,6 +37,11 @@ struct Args {
     /// Mission time between sensor updates, s (default: the scenario's).
     #[arg(long)]
     sensor_period_s: Option<f64>,
+    /// Restart after a crash: wait up to this many real seconds for the
+    /// vehicle's latest state and publish the snapshot of its mission time
+    /// (not epoch 0) first.
+    #[arg(long, value_name = "S")]
+    resume_wait_s: Option<f64>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -51,6 +56,8 @@ enum Error {
     Snapshot(#[from] planner::service::network::SnapshotError),
     #[error("--sensor-period-s {0}: must be > 0")]
     BadPeriod(f64),
+    #[error("--resume-wait-s {0}: must be between 0 and 3600")]
+    BadResumeWait(f64),
 }
 
 /// The vehicle's clock as last reported.
@@ -103,9 +110,35 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     let mut states = Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "sensor-sim");
     let mut waker = ctx.waker(Role::Sensor)?;
     let mut epoch = 0u64;
-    publish(&mut out, &world, epoch, period)?;
     let mut clock: Option<VehicleClock> = None;
     let mut outcome = Outcome::Running;
+    if let Some(wait_s) = args.resume_wait_s {
+        if !(wait_s.is_finite() && (0.0..=3600.0).contains(&wait_s)) {
+            return Err(Error::BadResumeWait(wait_s));
+        }
+        // The vehicle's state history reaches us when it next publishes.
+        let t0 = mono_now_ns();
+        while clock.is_none() && (mono_now_ns() - t0) as f64 * 1e-9 < wait_s {
+            states.drain(&mut |s| {
+                clock = Some(VehicleClock {
+                    mission_time_s: s.header.mission_time_s,
+                    sent_mono_ns: s.header.sent_mono_ns,
+                    time_scale: s.time_scale,
+                });
+            })?;
+            if clock.is_none() && waker.wait(Duration::from_millis(20))? == Wake::Shutdown {
+                return Ok(Outcome::Aborted);
+            }
+        }
+        if let Some(c) = clock {
+            epoch = (c.at(mono_now_ns()) / period).floor().max(0.0) as u64;
+            if epoch > 0 {
+                world.redraw(epoch);
+            }
+            eprintln!("sensor-sim: resumed at epoch {epoch}");
+        }
+    }
+    publish(&mut out, &world, epoch, period)?;
     loop {
         states.drain(&mut |s| {
             clock = Some(VehicleClock {
@@ -153,7 +186,7 @@ fn main() -> ExitCode {
     match run(&args) {
         Ok(Outcome::Aborted) => ExitCode::from(130),
         Ok(_) => ExitCode::SUCCESS,
-        Err(e @ Error::BadPeriod(_)) => {
+        Err(e @ (Error::BadPeriod(_) | Error::BadResumeWait(_))) => {
             eprintln!("sensor-sim: error: {e}");
             ExitCode::from(2)
         }

@@ -309,10 +309,16 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         plans: Guarded::new(ctx.inbox::<Plan>()?, fingerprint, "vehicle-sim"),
         status: Guarded::new(ctx.inbox::<PlannerStatus>()?, fingerprint, "vehicle-sim"),
     };
-    let resume: Option<Resume> = match &args.journal {
-        Some(p) => JournalSummary::read(p)?.resume(),
-        None => None,
+    let earlier = match &args.journal {
+        Some(p) => JournalSummary::read(p)?,
+        None => JournalSummary::default(),
     };
+    if let Some(o) = earlier.outcome() {
+        // Restarted after the end: nothing to do (a new mission needs a new journal).
+        eprintln!("vehicle-sim: the journal's mission already ended; nothing to resume");
+        return Ok(o);
+    }
+    let resume: Option<Resume> = earlier.resume();
     let journal = args.journal.as_deref().map(Journal::open).transpose()?;
     let mut v = Vehicle {
         sim: VehicleSim::new(),

@@ -6,4 +6,5 @@ pub mod journal;
 pub mod log;
 pub mod report;
 pub mod run;
+pub mod supervise;
 pub mod world;

@@ -61,6 +61,12 @@ pub struct Report {
     pub wall_time_s: f64,
     /// Shared-memory and iceoryx2 files of the run left after it.
     pub shm_files_left: usize,
+    /// Whether the planner ran as a child process.
+    pub planner_process: bool,
+    /// Faults injected and what came of them (`--faults`).
+    pub faults: Option<super::supervise::FaultReport>,
+    /// Times the vehicle resumed from its journal.
+    pub vehicle_restarts: u64,
 }
 
 impl Report {
@@ -123,6 +129,9 @@ impl Report {
             "time_scale": if self.lockstep { Value::Null } else { json!(self.time_scale) },
             "wall_time_s": self.wall_time_s,
             "shm_files_left": self.shm_files_left,
+            "planner_process": self.planner_process,
+            "vehicle_restarts": self.vehicle_restarts,
+            "faults": self.faults.as_ref().map(|f| f.to_json(matches!(self.outcome, Outcome::GoalReached | Outcome::TimedOut))),
         })
     }
 

@@ -22,9 +22,10 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use heapless::spsc::Queue;
 
-use super::journal::JournalSummary;
+use super::journal::{JournalEvent, JournalSummary};
 use super::log::lines;
 use super::report::Report;
+use super::supervise::{FaultKind, FaultReport, LivenessEvent, Monitor, PlannerTotals, Proc, plan_faults};
 use super::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
 use crate::msg::{Outcome, RejectCounters, VehicleState};
 use crate::plot::{BoundMarker, MapFigure, PlotError, RouteLayer, map_figure};
@@ -70,6 +71,23 @@ pub struct MissionArgs {
     /// Give up when a peer stays silent this long, real s.
     #[arg(long, default_value_t = 60.0)]
     pub answer_timeout_s: f64,
+    /// Run the planner as a child process (`planner serve`) supervised like
+    /// the simulators, instead of on a thread of this process: any of the
+    /// three can then be killed and restarted.
+    #[arg(long)]
+    pub planner_process: bool,
+    /// Inject this many faults at random mission times (SIGKILL + restart or
+    /// SIGSTOP/SIGCONT of a random process; scaled time; implies
+    /// --planner-process). Drawn from --fault-seed.
+    #[arg(long, default_value_t = 0, conflicts_with = "lockstep")]
+    pub faults: usize,
+    /// Seed of the fault draws (default: the scenario seed).
+    #[arg(long)]
+    pub fault_seed: Option<u64>,
+    /// A process silent for longer than this is reported as stalled, real
+    /// ms (the sensor gets at least three of its periods; scaled time only).
+    #[arg(long, default_value_t = 1000.0)]
+    pub stall_timeout_ms: f64,
 }
 
 /// Why a mission failed.
@@ -179,26 +197,62 @@ struct Kid {
     child: Option<Child>,
     log: PathBuf,
     status: Option<ExitStatus>,
+    bin: PathBuf,
+    args: Vec<String>,
 }
 
 impl Kid {
     fn spawn(name: &'static str, args: &[String], out: &Path) -> Result<Self, MissionError> {
-        let bin = sibling_binary(name)?;
+        Self::spawn_bin(name, name, args, out)
+    }
+
+    /// `bin_name` started as `name` (the planner runs as `planner serve`).
+    fn spawn_bin(name: &'static str, bin_name: &str, args: &[String], out: &Path) -> Result<Self, MissionError> {
+        let bin = if bin_name == "planner" {
+            std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?
+        } else {
+            sibling_binary(bin_name)?
+        };
         let log = out.join(format!("{name}.log"));
-        let err = File::create(&log).map_err(|e| io_err(&log, e))?;
-        let child = Command::new(&bin)
-            .args(args)
+        File::create(&log).map_err(|e| io_err(&log, e))?;
+        let mut k = Self {
+            name,
+            child: None,
+            log,
+            status: None,
+            bin,
+            args: args.to_vec(),
+        };
+        k.start(&[])?;
+        Ok(k)
+    }
+
+    /// Starts the process (again), with `extra` flags; stderr appends to its log.
+    fn start(&mut self, extra: &[String]) -> Result<(), MissionError> {
+        let err = File::options()
+            .append(true)
+            .open(&self.log)
+            .map_err(|e| io_err(&self.log, e))?;
+        let child = Command::new(&self.bin)
+            .args(&self.args)
+            .args(extra)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(err)
             .spawn()
-            .map_err(|e| MissionError::Child(format!("cannot start {}: {e}", bin.display())))?;
-        Ok(Self {
-            name,
-            child: Some(child),
-            log,
-            status: None,
-        })
+            .map_err(|e| MissionError::Child(format!("cannot start {}: {e}", self.bin.display())))?;
+        self.child = Some(child);
+        self.status = None;
+        Ok(())
+    }
+
+    /// SIGKILL and reap (a crash, as far as everyone else can tell).
+    fn kill_now(&mut self) {
+        if let Some(c) = &mut self.child {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+        self.child = None;
     }
 
     /// Whether it has exited (reaps it).
@@ -356,67 +410,43 @@ fn plot(path: &Path, world: &mut MissionWorld, trace: &Trace, title: &str) -> Re
     Ok(())
 }
 
-fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
-    let scale_ok = a.time_scale.is_finite() && a.time_scale > 0.0;
-    if !a.lockstep && !scale_ok {
-        return Err(MissionError::Usage(format!(
-            "--time-scale {}: must be > 0",
-            a.time_scale
-        )));
-    }
-    if !(a.answer_timeout_s.is_finite() && a.answer_timeout_s > 0.0) {
-        return Err(MissionError::Usage(format!(
-            "--answer-timeout-s {}: must be > 0",
-            a.answer_timeout_s
-        )));
-    }
-    let wall = Instant::now();
-    let mut world = load_world(&a.scenario)?;
-    let fingerprint = world.fingerprint();
-    let cfg = a
-        .service
-        .config(fingerprint, a.lockstep && !a.enforce_deadline)
-        .map_err(|e| match e {
-            ServeError::Usage(u) => MissionError::Usage(u),
-            other => MissionError::Serve(other),
-        })?;
-    let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
-    let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
-    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
-    std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
-    signal::install();
-    cleanup_dead_nodes(&domain_config(&prefix)?);
+/// What a run of the three processes produced, whichever way the planner ran.
+struct RunOut {
+    totals: PlannerTotals,
+    allocator_installed: bool,
+    last_state: Option<VehicleState>,
+    /// The vehicle reported the end of the mission to the planner.
+    finished: bool,
+    trace: Trace,
+    faults: Option<FaultReport>,
+}
 
-    let mut common = vec![
-        "--ipc-prefix".to_string(),
-        prefix.clone(),
-        "--vehicle".into(),
-        a.vehicle.clone(),
-    ];
-    common.extend(a.scenario.to_flags());
-    let mut vehicle_args = common.clone();
-    if a.lockstep {
-        vehicle_args.push("--lockstep".into());
-    } else {
-        vehicle_args.extend(["--time-scale".into(), a.time_scale.to_string()]);
-    }
-    vehicle_args.extend(["--answer-timeout-s".into(), a.answer_timeout_s.to_string()]);
-    // The vehicle's journal is the record of what happened; a fresh run
-    // starts a fresh one (an old one would be resumed).
-    let journal_path = out.join("journal.jsonl");
-    match std::fs::remove_file(&journal_path) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&journal_path, e)),
-        _ => {}
-    }
-    vehicle_args.extend(["--journal".into(), journal_path.display().to_string()]);
+/// How to start the simulators, where to write, and the mission's budget.
+struct Launch<'a> {
+    out: &'a Path,
+    /// Flags every process gets.
+    common: &'a [String],
+    vehicle_args: &'a [String],
+    /// Mission time budget, s.
+    budget: f64,
+}
+
+/// Runs the mission with the service on a thread of this process.
+fn threaded(
+    a: &MissionArgs,
+    opts: IpcOptions,
+    fingerprint: u64,
+    cfg: ServiceConfig,
+    l: &Launch,
+) -> Result<RunOut, MissionError> {
+    let (out, common, vehicle_args, budget) = (l.out.to_path_buf(), l.common, l.vehicle_args, l.budget);
     let mut kids = [
-        Kid::spawn("sensor-sim", &common, &out)?,
-        Kid::spawn("vehicle-sim", &vehicle_args, &out)?,
+        Kid::spawn("sensor-sim", common, &out)?,
+        Kid::spawn("vehicle-sim", vehicle_args, &out)?,
     ];
 
     let log_path = out.join("mission.log");
     let mut log = BufWriter::new(File::create(&log_path).map_err(|e| io_err(&log_path, e))?);
-    let budget = world.snapshot().time_available_s;
     let bar = if a.quiet {
         indicatif::ProgressBar::hidden()
     } else {
@@ -440,9 +470,9 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let mut child_error = None;
 
     let rt_priority = a.service.rt_priority;
+    let opts = &opts;
     let result = std::thread::scope(|scope| {
         let shared = &shared;
-        let opts = &opts;
         let handle = scope.spawn(move || {
             let mut events = |e: &ServiceEvent| {
                 // Never drop an event (the log must be complete): wait for room.
@@ -508,11 +538,6 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     if let Err(e) = log.flush() {
         log_error.get_or_insert_with(|| io_err(&log_path, e));
     }
-    let retired = retire_domain(&prefix)?;
-    let left = leftover_files(&prefix);
-    if !retired {
-        eprintln!("planner: iceoryx2 domain {prefix} still has live nodes; not removed");
-    }
     let service = match result {
         Ok(r) => r?,
         Err(_) => return Err(MissionError::Child("the service thread panicked".into())),
@@ -523,15 +548,388 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     if let Some(e) = child_error.or_else(|| kids.iter().find_map(|k| k.failed())) {
         return Err(MissionError::Child(e));
     }
-    let last = service.last_state;
+    let c = service.counters;
+    Ok(RunOut {
+        totals: PlannerTotals {
+            plans: c.plans,
+            sensor_updates: c.sensor_updates,
+            deadline_misses: c.deadline_misses,
+            deadline_cuts: c.deadline_cuts,
+            fallbacks: c.fallbacks,
+            iterations_total: c.iterations_total,
+            max_latency_us: service.latency_us.2,
+            latency_us: service.latency_us,
+            rejected: service.rejected,
+            alloc: alloc::counters(),
+        },
+        allocator_installed: alloc::installed(),
+        last_state: service.last_state,
+        finished: service.exit == ExitReason::Finished,
+        trace,
+        faults: None,
+    })
+}
+
+/// The fault being handled now.
+#[derive(Clone, Copy, Debug)]
+enum Active {
+    /// A killed process was restarted: cleared when it is heard from again.
+    Restarting { p: Proc, key_idx: usize, since: Instant },
+    /// A process is stopped until `until`.
+    Paused {
+        p: Proc,
+        key_idx: usize,
+        since: Instant,
+        until: Instant,
+        detected: bool,
+    },
+    /// A paused process was continued: cleared when it is heard from again.
+    Continued { p: Proc, key_idx: usize, detected: bool },
+}
+
+/// Longest wait for a restarted or continued process to be heard from
+/// again before the fault counts as not cleared, real s.
+const CLEAR_LIMIT: Duration = Duration::from_secs(30);
+
+/// Runs the mission with all three as supervised child processes, injecting
+/// the faults `--faults` asks for.
+fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f64) -> Result<RunOut, MissionError> {
+    let (out, common, vehicle_args, budget) = (l.out, l.common, l.vehicle_args, l.budget);
+    let stall = Duration::from_secs_f64(a.stall_timeout_ms / 1000.0);
+    let sensor_stall = if a.lockstep {
+        stall
+    } else {
+        stall.max(Duration::from_secs_f64(3.0 * sensor_period_s / a.time_scale))
+    };
+    let timeouts = [stall, sensor_stall, stall];
+    // The monitor subscribes before anyone publishes: it sees every status.
+    let mut monitor = Monitor::new(opts, timeouts)?;
+    let mut planner_args = vec!["serve".to_string()];
+    planner_args.extend(common.iter().cloned());
+    planner_args.extend(a.service.to_flags());
+    if a.lockstep && !a.enforce_deadline {
+        planner_args.push("--lockstep".into());
+    }
+    let log_path = out.join("mission.log");
+    File::create(&log_path).map_err(|e| io_err(&log_path, e))?;
+    planner_args.extend(["--log".into(), log_path.display().to_string()]);
+    let mut kids = [
+        Kid::spawn_bin("planner", "planner", &planner_args, out)?,
+        Kid::spawn("sensor-sim", common, out)?,
+        Kid::spawn("vehicle-sim", vehicle_args, out)?,
+    ];
+    let fault_seed = a.fault_seed.unwrap_or(a.scenario.seed);
+    let faults = plan_faults(fault_seed, a.faults, budget, &Proc::ALL);
+    let mut report = FaultReport {
+        planned: faults.clone(),
+        timeouts_ms: timeouts.map(|t| t.as_secs_f64() * 1000.0),
+        ..FaultReport::default()
+    };
+    let keys: Vec<String> = faults.iter().map(|f| f.key()).collect();
+    let faults_path = out.join("faults.log");
+    let mut flog = BufWriter::new(File::create(&faults_path).map_err(|e| io_err(&faults_path, e))?);
+    let wall0 = Instant::now();
+    let note = |flog: &mut BufWriter<File>, t: f64, v: serde_json::Value| {
+        let mut v = v;
+        v["t"] = serde_json::json!(t);
+        v["wall_s"] = serde_json::json!(wall0.elapsed().as_secs_f64());
+        let _ = writeln!(flog, "{v}");
+        let _ = flog.flush();
+    };
+    let bar = if a.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(budget as u64)
+    };
+    let mut next = 0;
+    let mut active: Option<Active> = None;
+    let mut events = Vec::new();
+    let mut forwarded = false;
+    let mut failed_since: Option<Instant> = None;
+    let mut child_error = None;
+    loop {
+        let vehicle_done = kids[Proc::Vehicle as usize].poll()
+            || monitor
+                .last_state()
+                .is_some_and(|s| s.outcome != Outcome::Running as u32);
+        let mut watch = [false; 3];
+        for p in Proc::ALL {
+            let restarting = matches!(active, Some(Active::Restarting { p: q, .. }) if q == p);
+            watch[p as usize] = !a.lockstep && !vehicle_done && !restarting && !kids[p as usize].poll();
+        }
+        events.clear();
+        monitor.poll(watch, &mut events);
+        let t = monitor.last_state().map_or(0.0, |s| s.header.mission_time_s);
+        bar.set_position(t.clamp(0.0, budget) as u64);
+        for e in &events {
+            match *e {
+                LivenessEvent::Stalled { proc, silent } => {
+                    *report.stalls.entry(proc.name().to_string()).or_default() += 1;
+                    if let Some(Active::Paused { p, since, detected, .. }) = &mut active
+                        && *p == proc
+                        && !*detected
+                    {
+                        *detected = true;
+                        report.detect_ms_max = report.detect_ms_max.max(since.elapsed().as_secs_f64() * 1000.0);
+                    }
+                    eprintln!("planner: {} silent for {} ms: stalled", proc.name(), silent.as_millis());
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "stall_detected", "process": proc.name(), "silent_ms": silent.as_millis() as u64}),
+                    );
+                }
+                LivenessEvent::Recovered { proc, silent } => note(
+                    &mut flog,
+                    t,
+                    serde_json::json!({"event": "recovered", "process": proc.name(), "silent_ms": silent.as_millis() as u64}),
+                ),
+            }
+        }
+        // The fault in hand, then the next one.
+        match active {
+            Some(Active::Restarting { p, key_idx, since }) => {
+                if monitor.heard(p) {
+                    *report.cleared.entry(keys[key_idx].clone()).or_default() += 1;
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "cleared", "fault": keys[key_idx]}),
+                    );
+                    active = None;
+                } else if since.elapsed() > CLEAR_LIMIT || vehicle_done {
+                    active = None;
+                }
+            }
+            Some(Active::Paused {
+                p,
+                key_idx,
+                until,
+                detected,
+                ..
+            }) => {
+                if Instant::now() >= until || vehicle_done && p != Proc::Vehicle {
+                    kids[p as usize].signal(libc::SIGCONT);
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "continued", "process": p.name()}),
+                    );
+                    active = Some(Active::Continued { p, key_idx, detected });
+                }
+            }
+            Some(Active::Continued { p, key_idx, detected }) => {
+                if !monitor.stalled(p) || vehicle_done {
+                    if detected {
+                        *report.cleared.entry(keys[key_idx].clone()).or_default() += 1;
+                        note(
+                            &mut flog,
+                            t,
+                            serde_json::json!({"event": "cleared", "fault": keys[key_idx]}),
+                        );
+                    }
+                    active = None;
+                }
+            }
+            None => {
+                if next < faults.len() && !vehicle_done && !forwarded && t >= faults[next].at_s {
+                    let f = faults[next];
+                    let p = f.target;
+                    *report.injected.entry(keys[next].clone()).or_default() += 1;
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "inject", "fault": keys[next], "planned_t": f.at_s}),
+                    );
+                    let now = Instant::now();
+                    match f.kind {
+                        FaultKind::Kill => {
+                            kids[p as usize].kill_now();
+                            monitor.forget(p);
+                            // A restarted sensor starts from the vehicle's
+                            // mission time, not from epoch 0.
+                            let extra: Vec<String> = if p == Proc::Sensor {
+                                vec!["--resume-wait-s".into(), "5".into()]
+                            } else {
+                                Vec::new()
+                            };
+                            kids[p as usize].start(&extra)?;
+                            *report.restarts.entry(p.name().to_string()).or_default() += 1;
+                            active = Some(Active::Restarting {
+                                p,
+                                key_idx: next,
+                                since: now,
+                            });
+                        }
+                        FaultKind::Pause => {
+                            kids[p as usize].signal(libc::SIGSTOP);
+                            active = Some(Active::Paused {
+                                p,
+                                key_idx: next,
+                                since: now,
+                                until: now + timeouts[p as usize] + Duration::from_millis(500),
+                                detected: false,
+                            });
+                        }
+                    }
+                    next += 1;
+                }
+            }
+        }
+        if signal::shutdown_requested() && !forwarded {
+            forwarded = true;
+            for k in &kids {
+                k.signal(libc::SIGCONT);
+                k.signal(signal::received_signal());
+            }
+        }
+        if kids[Proc::Vehicle as usize].poll() {
+            break;
+        }
+        // A child that failed on its own (not one we killed) ends the run
+        // after a grace period.
+        if kids.iter_mut().any(|k| k.poll() && k.failed().is_some()) {
+            let since = *failed_since.get_or_insert_with(Instant::now);
+            if since.elapsed() > Duration::from_secs(2) {
+                child_error = kids.iter().find_map(|k| k.failed());
+                break;
+            }
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    bar.finish_and_clear();
+    for k in &kids {
+        k.signal(libc::SIGCONT);
+    }
+    // The planner and the sensor end when they see the vehicle's last state.
+    for k in &mut kids {
+        k.finish(Duration::from_secs(10));
+    }
+    events.clear();
+    monitor.poll([false; 3], &mut events);
+    let _ = flog.flush();
+    if let Some(e) = child_error.or_else(|| kids.iter().find_map(|k| k.failed())) {
+        return Err(MissionError::Child(e));
+    }
+    let totals = monitor.planner_totals();
+    let last_state = monitor.last_state().copied();
+    let mut trace = Trace {
+        last_epoch: monitor.last_epoch(),
+        ..Trace::default()
+    };
+    drop(monitor);
+    // The plot's trace comes from the journal (the planner's events are in
+    // its own process).
+    let journal = JournalSummary::read(&out.join("journal.jsonl")).map_err(|e| MissionError::Child(e.to_string()))?;
+    for e in &journal.events {
+        match e {
+            JournalEvent::Arrival { pos, .. } => trace.arrivals.push((pos[0], pos[1])),
+            JournalEvent::Plan { route, .. } => {
+                if trace.first_plan.is_empty() {
+                    trace.first_plan = route.clone();
+                }
+                trace.last_plan = route.clone();
+            }
+            _ => {}
+        }
+    }
+    Ok(RunOut {
+        totals,
+        allocator_installed: true,
+        finished: journal.outcome().is_some_and(|o| o != Outcome::Aborted),
+        last_state,
+        trace,
+        faults: Some(report),
+    })
+}
+
+fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
+    let scale_ok = a.time_scale.is_finite() && a.time_scale > 0.0;
+    if !a.lockstep && !scale_ok {
+        return Err(MissionError::Usage(format!(
+            "--time-scale {}: must be > 0",
+            a.time_scale
+        )));
+    }
+    if !(a.answer_timeout_s.is_finite() && a.answer_timeout_s > 0.0) {
+        return Err(MissionError::Usage(format!(
+            "--answer-timeout-s {}: must be > 0",
+            a.answer_timeout_s
+        )));
+    }
+    if !(a.stall_timeout_ms.is_finite() && a.stall_timeout_ms >= 10.0) {
+        return Err(MissionError::Usage(format!(
+            "--stall-timeout-ms {}: must be >= 10",
+            a.stall_timeout_ms
+        )));
+    }
+    let wall = Instant::now();
+    let mut world = load_world(&a.scenario)?;
+    let fingerprint = world.fingerprint();
+    let cfg = a
+        .service
+        .config(fingerprint, a.lockstep && !a.enforce_deadline)
+        .map_err(|e| match e {
+            ServeError::Usage(u) => MissionError::Usage(u),
+            other => MissionError::Serve(other),
+        })?;
+    let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
+    let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
+    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
+    std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
+    signal::install();
+    cleanup_dead_nodes(&domain_config(&prefix)?);
+
+    let mut common = vec![
+        "--ipc-prefix".to_string(),
+        prefix.clone(),
+        "--vehicle".into(),
+        a.vehicle.clone(),
+    ];
+    common.extend(a.scenario.to_flags());
+    let mut vehicle_args = common.clone();
+    if a.lockstep {
+        vehicle_args.push("--lockstep".into());
+    } else {
+        vehicle_args.extend(["--time-scale".into(), a.time_scale.to_string()]);
+    }
+    vehicle_args.extend(["--answer-timeout-s".into(), a.answer_timeout_s.to_string()]);
+    // The vehicle's journal is the record of what happened; a fresh run
+    // starts a fresh one (an old one would be resumed).
+    let journal_path = out.join("journal.jsonl");
+    match std::fs::remove_file(&journal_path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&journal_path, e)),
+        _ => {}
+    }
+    vehicle_args.extend(["--journal".into(), journal_path.display().to_string()]);
+    let budget = world.snapshot().time_available_s;
+    let launch = Launch {
+        out: &out,
+        common: &common,
+        vehicle_args: &vehicle_args,
+        budget,
+    };
+    let run = if a.planner_process || a.faults > 0 {
+        supervised(a, &opts, &launch, world.sensor_period_s())
+    } else {
+        threaded(a, opts, fingerprint, cfg, &launch)
+    };
+    let retired = retire_domain(&prefix)?;
+    let left = leftover_files(&prefix);
+    if !retired {
+        eprintln!("planner: iceoryx2 domain {prefix} still has live nodes; not removed");
+    }
+    let run = run?;
+    let last = run.last_state;
     // What happened is what the vehicle's journal says.
     let journal = JournalSummary::read(&journal_path).map_err(|e| MissionError::Child(e.to_string()))?;
-    let outcome = match (service.exit, journal.outcome()) {
-        (ExitReason::Finished, Some(o)) => o,
+    let outcome = match (run.finished, journal.outcome()) {
+        (true, Some(o)) => o,
         _ => Outcome::Aborted,
     };
     let rejected_by_vehicle = last.map_or(0, |s| s.plans_rejected);
-    let c = service.counters;
+    let c = run.totals;
+    let trace = run.trace;
     let report = Report {
         outcome,
         time_used_s: journal.time_s(),
@@ -541,16 +939,16 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         distance_m: journal.distance_m(),
         route: journal.route(),
         plans: c.plans,
-        latency_us: service.latency_us,
+        latency_us: c.latency_us,
         deadline_ms: cfg.deadline.as_secs_f64() * 1000.0,
         deadline_misses: c.deadline_misses,
         deadline_cuts: c.deadline_cuts,
         fallbacks: c.fallbacks,
         iterations_total: c.iterations_total,
-        alloc: alloc::counters(),
-        allocator_installed: alloc::installed(),
+        alloc: c.alloc,
+        allocator_installed: run.allocator_installed,
         sensor_updates: c.sensor_updates,
-        rejected: service.rejected,
+        rejected: c.rejected,
         plans_rejected_by_vehicle: rejected_by_vehicle,
         seed: a.scenario.seed,
         planner_seed: a.service.planner_seed,
@@ -560,6 +958,9 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         time_scale: a.time_scale,
         wall_time_s: wall.elapsed().as_secs_f64(),
         shm_files_left: left.len(),
+        planner_process: a.planner_process,
+        faults: run.faults,
+        vehicle_restarts: journal.restarts(),
     };
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
