@@ -371,3 +371,72 @@ fn killed_and_paused_processes_are_restarted_or_detected_and_the_report_adds_up(
     let flog = std::fs::read_to_string(out.join("faults.log")).unwrap();
     assert!(flog.contains("\"stall_detected\""), "{flog}");
 }
+
+/// Busy-loop processes that keep every core busy until dropped.
+struct BusyLoops(Vec<std::process::Child>);
+
+impl BusyLoops {
+    fn start(n: usize) -> Self {
+        Self(
+            (0..n)
+                .map(|_| {
+                    Command::new("sh")
+                        .args(["-c", "while :; do :; done"])
+                        .stdin(Stdio::null())
+                        .stdout(Stdio::null())
+                        .spawn()
+                        .expect("start a busy loop")
+                })
+                .collect(),
+        )
+    }
+}
+
+impl Drop for BusyLoops {
+    fn drop(&mut self) {
+        for c in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+#[test]
+fn under_overload_every_plan_is_cut_to_its_deadline_and_the_cost_is_reported() {
+    let _alone = EXCLUSIVE.write().unwrap_or_else(|e| e.into_inner());
+    // Both cores busy with other work; an iteration budget that no solve
+    // finishes within 20 ms; the service thread SCHED_FIFO where permitted.
+    let args = [
+        "--enforce-deadline",
+        "--deadline-ms",
+        "20",
+        "--iterations",
+        "3000",
+        "--time-available-s",
+        "6000",
+    ];
+    let mut rt = args.to_vec();
+    rt.extend(["--rt-priority", "10"]);
+    let busy = BusyLoops::start(2);
+    let (r, realtime) = match try_lockstep_mission(5, 1, 10, &rt) {
+        Ok((r, _, _)) => (r, true),
+        Err((Some(2), err)) if err.contains("SCHED_FIFO refused") => (lockstep_mission(5, 1, 10, &args).0, false),
+        Err((code, err)) => panic!("mission failed ({code:?}):\n{err}"),
+    };
+    drop(busy);
+    let plans = r["plans"].as_u64().unwrap();
+    let a = &r["anytime"];
+    assert_eq!(a["measured"], true, "{a:#}");
+    assert_eq!(a["plans_cut"], plans, "every solve is cut: {r:#}");
+    let mean_cut = a["mean_iterations_cut"].as_f64().unwrap();
+    assert!((1.0..3000.0).contains(&mean_cut), "{a:#}");
+    assert_eq!(a["iterations_budget"], 3000);
+    assert!(a["mean_weight_cut"].as_f64().is_some() && a["mean_weight_warm_start"].as_f64().is_some());
+    if realtime {
+        assert_eq!(r["deadline_misses"], 0, "{r:#}");
+    }
+    eprintln!(
+        "overload: {plans} plans, all cut, mean {mean_cut:.0} of 3000 iterations, weight of cut plans {} vs their warm starts {}, mission weight {}, deadline misses {} (realtime {realtime})",
+        a["mean_weight_cut"], a["mean_weight_warm_start"], r["weight"], r["deadline_misses"]
+    );
+}

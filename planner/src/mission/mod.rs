@@ -6,5 +6,6 @@ pub mod journal;
 pub mod log;
 pub mod report;
 pub mod run;
+pub mod soak;
 pub mod supervise;
 pub mod world;

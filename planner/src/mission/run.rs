@@ -269,6 +269,11 @@ impl Kid {
         self.status.is_some()
     }
 
+    /// Resident set size now, kB (`None`: not running).
+    fn rss_kb(&self) -> Option<u64> {
+        rss_kb_of(self.child.as_ref()?.id())
+    }
+
     fn signal(&self, sig: i32) {
         if let Some(c) = &self.child {
             // SAFETY: a signal to our own child's pid.
@@ -315,6 +320,14 @@ impl Drop for Kid {
             self.finish(Duration::ZERO);
         }
     }
+}
+
+/// Resident set size of process `pid`, kB (`VmRSS` in `/proc/<pid>/status`).
+pub fn rss_kb_of(pid: u32) -> Option<u64> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    text.lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
 }
 
 fn fresh_out_dir(seed: u64) -> PathBuf {
@@ -419,6 +432,9 @@ struct RunOut {
     finished: bool,
     trace: Trace,
     faults: Option<FaultReport>,
+    /// Peak resident set size of each child (planner, sensor, vehicle), kB
+    /// (0: not measured).
+    rss_kb: [u64; 3],
 }
 
 /// How to start the simulators, where to write, and the mission's budget.
@@ -561,12 +577,14 @@ fn threaded(
             latency_us: service.latency_us,
             rejected: service.rejected,
             alloc: alloc::counters(),
+            cut: Some(c.cut),
         },
         allocator_installed: alloc::installed(),
         last_state: service.last_state,
         finished: service.exit == ExitReason::Finished,
         trace,
         faults: None,
+        rss_kb: [0; 3],
     })
 }
 
@@ -647,7 +665,15 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
     let mut forwarded = false;
     let mut failed_since: Option<Instant> = None;
     let mut child_error = None;
+    let mut rss_kb = [0u64; 3];
+    let mut rss_at = Instant::now();
     loop {
+        if rss_at.elapsed() >= Duration::from_millis(100) {
+            rss_at = Instant::now();
+            for (peak, k) in rss_kb.iter_mut().zip(&kids) {
+                *peak = (*peak).max(k.rss_kb().unwrap_or(0));
+            }
+        }
         let vehicle_done = kids[Proc::Vehicle as usize].poll()
             || monitor
                 .last_state()
@@ -840,10 +866,12 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
         last_state,
         trace,
         faults: Some(report),
+        rss_kb,
     })
 }
 
-fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
+/// Runs one mission; returns its report and output folder.
+pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let scale_ok = a.time_scale.is_finite() && a.time_scale > 0.0;
     if !a.lockstep && !scale_ok {
         return Err(MissionError::Usage(format!(
@@ -961,6 +989,9 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         planner_process: a.planner_process,
         faults: run.faults,
         vehicle_restarts: journal.restarts(),
+        iterations_budget: cfg.iterations,
+        cut: c.cut,
+        rss_kb: run.rss_kb,
     };
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();

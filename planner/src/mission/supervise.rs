@@ -328,6 +328,9 @@ pub struct PlannerTotals {
     pub rejected: RejectCounters,
     /// Allocation counters, summed over the planner's processes.
     pub alloc: AllocCounters,
+    /// What the deadline cuts cost (`None`: not measured, the planner ran
+    /// as a child and its status message does not carry these).
+    pub cut: Option<crate::service::core::CutCounters>,
 }
 
 /// What the faults of one mission came to.
