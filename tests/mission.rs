@@ -130,6 +130,10 @@ fn same_seeds_give_a_byte_identical_mission_log() {
     assert!(a == b, "two lockstep runs with the same seeds wrote different logs");
     let (_, c, _) = lockstep_mission(4, 7, 10, &[]);
     assert!(a != c, "another scenario seed should give another mission");
+    // The planner as a child process (`planner serve`) writes the same log.
+    let (r, d, _) = lockstep_mission(3, 7, 10, &["--planner-process"]);
+    assert_eq!(r["planner_process"], true);
+    assert!(a == d, "the planner as a child process wrote another log");
 }
 
 #[test]
@@ -439,4 +443,50 @@ fn under_overload_every_plan_is_cut_to_its_deadline_and_the_cost_is_reported() {
         "overload: {plans} plans, all cut, mean {mean_cut:.0} of 3000 iterations, weight of cut plans {} vs their warm starts {}, mission weight {}, deadline misses {} (realtime {realtime})",
         a["mean_weight_cut"], a["mean_weight_warm_start"], r["weight"], r["deadline_misses"]
     );
+}
+
+#[test]
+fn a_new_run_cleans_up_what_a_killed_run_left_in_its_domain() {
+    let _shared = shared();
+    let p = prefix("t");
+    // A planner killed with SIGKILL leaves its dead node's files behind.
+    let mut serve = Command::new(binary("planner"))
+        .args(["serve", "--nodes", "10", "--lockstep", "--ipc-prefix", &p])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start planner serve");
+    let t0 = std::time::Instant::now();
+    while leftovers(&p).len() < 3 {
+        assert!(t0.elapsed() < LIMIT, "planner serve created nothing");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    serve.kill().unwrap();
+    serve.wait().unwrap();
+    assert!(!leftovers(&p).is_empty(), "a SIGKILL leaves files");
+    // A mission in the same domain cleans them up at start and leaves nothing.
+    let out = temp_dir("d");
+    let out_s = out.display().to_string();
+    let o = run(
+        &binary("planner"),
+        &[
+            "mission",
+            "--lockstep",
+            "--quiet",
+            "--nodes",
+            "10",
+            "--ipc-prefix",
+            &p,
+            "--out",
+            &out_s,
+        ],
+        LIMIT,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_json(&out.join("report.json"));
+    assert_eq!(r["goal_reached"], true, "{r:#}");
+    assert_eq!(r["shm_files_left"], 0, "{r:#}");
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
 }

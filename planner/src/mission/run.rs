@@ -592,7 +592,12 @@ fn threaded(
 #[derive(Clone, Copy, Debug)]
 enum Active {
     /// A killed process was restarted: cleared when it is heard from again.
-    Restarting { p: Proc, key_idx: usize, since: Instant },
+    Restarting {
+        p: Proc,
+        key_idx: usize,
+        since: Instant,
+        attempts: u32,
+    },
     /// A process is stopped until `until`.
     Paused {
         p: Proc,
@@ -608,6 +613,21 @@ enum Active {
 /// Longest wait for a restarted or continued process to be heard from
 /// again before the fault counts as not cleared, real s.
 const CLEAR_LIMIT: Duration = Duration::from_secs(30);
+
+/// Starts of a killed process before giving up: a start can fail on a race
+/// with the dead node's cleanup (iceoryx2 #1578; notes §5 say retry).
+const RESTART_ATTEMPTS: u32 = 3;
+
+/// Extra flags of a restarted process: a sensor starts from the vehicle's
+/// mission time, not from epoch 0 (the vehicle resumes from its journal,
+/// the planner from the topics' history, with their usual flags).
+fn restart_flags(p: Proc) -> Vec<String> {
+    if p == Proc::Sensor {
+        vec!["--resume-wait-s".into(), "5".into()]
+    } else {
+        Vec::new()
+    }
+}
 
 /// Runs the mission with all three as supervised child processes, injecting
 /// the faults `--faults` asks for.
@@ -714,7 +734,12 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
         }
         // The fault in hand, then the next one.
         match active {
-            Some(Active::Restarting { p, key_idx, since }) => {
+            Some(Active::Restarting {
+                p,
+                key_idx,
+                since,
+                attempts,
+            }) => {
                 if monitor.heard(p) {
                     *report.cleared.entry(keys[key_idx].clone()).or_default() += 1;
                     note(
@@ -725,6 +750,21 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
                     active = None;
                 } else if since.elapsed() > CLEAR_LIMIT || vehicle_done {
                     active = None;
+                } else if attempts < RESTART_ATTEMPTS && kids[p as usize].poll() && kids[p as usize].failed().is_some()
+                {
+                    let why = kids[p as usize].failed().unwrap_or_default();
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "restart_failed", "process": p.name(), "why": why}),
+                    );
+                    kids[p as usize].start(&restart_flags(p))?;
+                    active = Some(Active::Restarting {
+                        p,
+                        key_idx,
+                        since,
+                        attempts: attempts + 1,
+                    });
                 }
             }
             Some(Active::Paused {
@@ -772,19 +812,13 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
                         FaultKind::Kill => {
                             kids[p as usize].kill_now();
                             monitor.forget(p);
-                            // A restarted sensor starts from the vehicle's
-                            // mission time, not from epoch 0.
-                            let extra: Vec<String> = if p == Proc::Sensor {
-                                vec!["--resume-wait-s".into(), "5".into()]
-                            } else {
-                                Vec::new()
-                            };
-                            kids[p as usize].start(&extra)?;
+                            kids[p as usize].start(&restart_flags(p))?;
                             *report.restarts.entry(p.name().to_string()).or_default() += 1;
                             active = Some(Active::Restarting {
                                 p,
                                 key_idx: next,
                                 since: now,
+                                attempts: 1,
                             });
                         }
                         FaultKind::Pause => {
@@ -812,9 +846,17 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
         if kids[Proc::Vehicle as usize].poll() {
             break;
         }
-        // A child that failed on its own (not one we killed) ends the run
-        // after a grace period.
-        if kids.iter_mut().any(|k| k.poll() && k.failed().is_some()) {
+        // A child that failed on its own (not one we killed, nor one being
+        // restarted) ends the run after a grace period.
+        let restarting = match active {
+            Some(Active::Restarting { p, .. }) => Some(p as usize),
+            _ => None,
+        };
+        if kids
+            .iter_mut()
+            .enumerate()
+            .any(|(i, k)| Some(i) != restarting && k.poll() && k.failed().is_some())
+        {
             let since = *failed_since.get_or_insert_with(Instant::now);
             if since.elapsed() > Duration::from_secs(2) {
                 child_error = kids.iter().find_map(|k| k.failed());
