@@ -361,6 +361,8 @@ fn killed_and_paused_processes_are_restarted_or_detected_and_the_report_adds_up(
     // Every fault injected was cleared: restarted processes were heard from
     // again, paused ones were detected and heard from again.
     assert_eq!(f["injected_by_kind"], f["survived_by_kind"], "{f:#}");
+    assert_eq!(f["injected_by_kind"], f["cleared_by_kind"], "{f:#}");
+    assert_eq!(f["cut_short_by_end"], 0, "{f:#}");
     for key in ["kill_planner", "kill_vehicle-sim", "pause_sensor-sim"] {
         assert!(f["injected_by_kind"][key].as_u64().unwrap_or(0) > 0, "{key}: {f:#}");
     }

@@ -38,6 +38,15 @@ fn a_short_soak_with_faults_completes_every_mission_and_leaks_nothing() {
     assert!(injected >= 3, "{v:#}");
     assert_eq!(v["faults_survived"], injected, "{v:#}");
     assert_eq!(v["faults_injected_by_kind"], v["faults_survived_by_kind"], "{v:#}");
+    // Cleared: restarted processes heard from again, pauses detected; only
+    // a fault the mission's end overtook may be missing.
+    let cleared = v["faults_cleared"].as_u64().unwrap();
+    assert_eq!(
+        cleared + v["faults_cut_short_by_mission_end"].as_u64().unwrap(),
+        injected,
+        "{v:#}"
+    );
+    assert!(cleared >= 3, "{v:#}");
     assert_eq!(v["shm_files_leaked"], 0, "{v:#}");
     for key in [
         "reached_goal",

@@ -25,7 +25,9 @@ use heapless::spsc::Queue;
 use super::journal::{JournalEvent, JournalSummary};
 use super::log::lines;
 use super::report::Report;
-use super::supervise::{FaultKind, FaultReport, LivenessEvent, Monitor, PlannerTotals, Proc, plan_faults};
+use super::supervise::{
+    FaultKind, FaultReport, LATEST_INJECTION, LivenessEvent, Monitor, PlannerTotals, Proc, plan_faults,
+};
 use super::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
 use crate::msg::{Outcome, RejectCounters, VehicleState};
 use crate::plot::{BoundMarker, MapFigure, PlotError, RouteLayer, map_figure};
@@ -798,7 +800,15 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
                 }
             }
             None => {
-                if next < faults.len() && !vehicle_done && !forwarded && t >= faults[next].at_s {
+                if next < faults.len() && t >= faults[next].at_s && t > LATEST_INJECTION * budget {
+                    report.skipped_late += 1;
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "skipped_late", "fault": keys[next]}),
+                    );
+                    next += 1;
+                } else if next < faults.len() && !vehicle_done && !forwarded && t >= faults[next].at_s {
                     let f = faults[next];
                     let p = f.target;
                     *report.injected.entry(keys[next].clone()).or_default() += 1;

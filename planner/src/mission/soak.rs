@@ -153,6 +153,8 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         (0, 0, 0u64, 0u64, 0u64);
     let mut injected = BTreeMap::new();
     let mut survived = BTreeMap::new();
+    let mut cleared = BTreeMap::new();
+    let (mut cut_short, mut skipped_late) = (0u64, 0u64);
     let mut stalls = BTreeMap::new();
     let mut rejected = [0u64; REJECT_KINDS];
     let mut rss_children: Vec<[u64; 3]> = Vec::new();
@@ -180,6 +182,9 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                 let f = &j["faults"];
                 add(&mut injected, &f["injected_by_kind"]);
                 add(&mut survived, &f["survived_by_kind"]);
+                add(&mut cleared, &f["cleared_by_kind"]);
+                cut_short += f["cut_short_by_end"].as_u64().unwrap_or(0);
+                skipped_late += f["skipped_late"].as_u64().unwrap_or(0);
                 add(&mut stalls, &f["stalls_detected"]);
                 json!({
                     "mission": k,
@@ -190,6 +195,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                     "faults_injected": f["injected"],
                     "faults": f["injected_by_kind"],
                     "survived": f["survived_by_kind"],
+                    "cleared": f["cleared_by_kind"],
                     "stalls_detected": f["stalls_detected"],
                     "rejected_messages": r.rejected.total(),
                     "deadline_misses": r.deadline_misses,
@@ -227,6 +233,10 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         "faults_injected_by_kind": injected,
         "faults_survived": survived.values().sum::<u64>(),
         "faults_survived_by_kind": survived,
+        "faults_cleared": cleared.values().sum::<u64>(),
+        "faults_cleared_by_kind": cleared,
+        "faults_cut_short_by_mission_end": cut_short,
+        "faults_skipped_late": skipped_late,
         "stalls_detected": stalls,
         "rejected_messages": rejected.iter().sum::<u64>(),
         "rejected_messages_by_kind": by_kind,

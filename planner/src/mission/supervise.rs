@@ -351,7 +351,15 @@ pub struct FaultReport {
     pub detect_ms_max: f64,
     /// The stall timeouts, ms, by process.
     pub timeouts_ms: [f64; 3],
+    /// Faults not injected because their turn came too late in the
+    /// mission (after [`LATEST_INJECTION`] of the budget).
+    pub skipped_late: u64,
 }
+
+/// Share of the time budget after which no fault is injected any more
+/// (faults wait for the previous one to clear, so late ones can bunch up
+/// against the mission's end, where there is no time left to clear them).
+pub const LATEST_INJECTION: f64 = 0.85;
 
 impl FaultReport {
     /// Faults injected.
@@ -359,19 +367,26 @@ impl FaultReport {
         self.injected.values().sum()
     }
 
-    /// The report's `faults` object; `survived`: whether the mission still
-    /// ended normally (then every cleared fault counts as survived).
+    /// The report's `faults` object. `survived`: whether the mission still
+    /// ended normally; then every fault injected was survived. `cleared` is
+    /// the stronger record: the restarted process was heard from again, the
+    /// paused one was detected and heard from again; a fault the mission's
+    /// end overtook before that is `cut_short_by_end`.
     pub fn to_json(&self, survived: bool) -> Value {
         let survived_by_kind: serde_json::Map<String, Value> = self
-            .cleared
+            .injected
             .iter()
             .map(|(k, v)| (k.clone(), json!(if survived { *v } else { 0 })))
             .collect();
+        let cleared: u64 = self.cleared.values().sum();
         json!({
             "planned": self.planned.len(),
             "injected": self.injected_total(),
             "injected_by_kind": self.injected,
             "survived_by_kind": survived_by_kind,
+            "cleared_by_kind": self.cleared,
+            "cut_short_by_end": self.injected_total().saturating_sub(cleared),
+            "skipped_late": self.skipped_late,
             "stalls_detected": self.stalls,
             "restarts": self.restarts,
             "stall_detect_ms_max": self.detect_ms_max,
@@ -400,5 +415,20 @@ mod tests {
         assert!(only.iter().all(|f| f.target == Proc::Sensor));
         assert!(plan_faults(5, 3, 1000.0, &[]).is_empty());
         assert_eq!(a[0].key(), format!("{}_{}", a[0].kind.name(), a[0].target.name()));
+    }
+
+    #[test]
+    fn the_fault_report_separates_survived_from_cleared() {
+        let mut r = FaultReport::default();
+        r.injected.insert("kill_planner".into(), 2);
+        r.injected.insert("pause_sensor-sim".into(), 1);
+        r.cleared.insert("kill_planner".into(), 2);
+        let j = r.to_json(true);
+        assert_eq!(j["injected"], 3);
+        assert_eq!(j["survived_by_kind"]["pause_sensor-sim"], 1);
+        assert_eq!(j["cleared_by_kind"]["kill_planner"], 2);
+        assert_eq!(j["cut_short_by_end"], 1);
+        let failed = r.to_json(false);
+        assert_eq!(failed["survived_by_kind"]["kill_planner"], 0);
     }
 }
