@@ -416,6 +416,10 @@ fn under_overload_every_plan_is_cut_to_its_deadline_and_the_cost_is_reported() {
         "--enforce-deadline",
         "--deadline-ms",
         "20",
+        // The paper's PSO: its iteration budget is what the deadline cuts
+        // (auto stops by itself on a network this small).
+        "--algorithm",
+        "pso",
         "--iterations",
         "3000",
         "--time-available-s",

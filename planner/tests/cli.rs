@@ -854,6 +854,9 @@ fn montecarlo_rejects_bad_arguments() {
     assert!(!out_dir.exists(), "nothing is written for rejected arguments");
 }
 
+const QUALITY_HEADER: &str =
+    "instance,deadline_ms,algorithm,score,optimum,gap,gap_bound,solve_ms,feasible,optimum_source";
+
 #[test]
 fn quality_reports_gaps_on_classic_instances() {
     let dir = scratch("quality");
@@ -863,7 +866,7 @@ fn quality_reports_gaps_on_classic_instances() {
         "--instances",
         &format!("{DATA}/op"),
         "--deadline-ms",
-        "20",
+        "20,5",
         "--algorithms",
         "auto,pso",
         "--out",
@@ -871,27 +874,83 @@ fn quality_reports_gaps_on_classic_instances() {
     ]);
     assert_ok(&out);
     let text = stdout(&out);
-    for needle in ["3 instances", "mean gap%", "p99 ms", "auto", "pso"] {
+    for needle in [
+        "3 instances",
+        "deadline 20 ms",
+        "deadline 5 ms",
+        "mean gap%",
+        "p99 ms",
+        "auto",
+        "pso",
+    ] {
         assert!(text.contains(needle), "{needle:?} missing from:\n{text}");
     }
     let best = best_known();
     let body = std::fs::read_to_string(&csv).unwrap();
     let mut lines = body.lines();
-    assert_eq!(
-        lines.next(),
-        Some("instance,algorithm,score,optimum,gap,solve_ms,feasible,optimum_source")
-    );
+    assert_eq!(lines.next(), Some(QUALITY_HEADER));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 6, "3 instances x 2 algorithms");
+    assert_eq!(rows.len(), 12, "3 instances x 2 deadlines x 2 algorithms");
     for r in &rows {
+        assert!(r[1] == "20" || r[1] == "5", "{r:?}");
         let optimum = best.get(r[0]).unwrap().score;
-        assert_eq!(r[3].parse::<f64>().unwrap(), optimum);
-        let score: f64 = r[2].parse().unwrap();
+        assert_eq!(r[4].parse::<f64>().unwrap(), optimum);
+        let score: f64 = r[3].parse().unwrap();
         assert!(score <= optimum, "{r:?}");
-        let gap: f64 = r[4].parse().unwrap();
+        let gap: f64 = r[5].parse().unwrap();
         assert!((gap - 100.0 * (optimum - score) / optimum).abs() < 1e-3, "{r:?}");
-        assert_eq!(r[6], "true");
-        assert_eq!(r[7], "best_known");
+        assert_eq!(r[6], r[5], "a known optimum certifies the gap itself");
+        assert_eq!(r[8], "true");
+        assert_eq!(r[9], "best_known");
+    }
+}
+
+#[test]
+fn quality_computes_the_optimum_with_the_exact_solver() {
+    let dir = scratch("quality-exact");
+    let instances = dir.join("instances");
+    std::fs::create_dir_all(&instances).unwrap();
+    for seed in [4, 5] {
+        write_instance(
+            &instances,
+            &format!("r{seed}.json"),
+            &random_instance(18, 0.5, 31_000.0, seed),
+        );
+    }
+    let csv = dir.join("q.csv");
+    let out = planner(&[
+        "quality",
+        "--instances",
+        path_str(&instances),
+        "--deadline-ms",
+        "5",
+        "--algorithms",
+        "pso,auto",
+        "--clock",
+        "cpu",
+        "--out",
+        path_str(&csv),
+    ]);
+    assert_ok(&out);
+    let text = stdout(&out);
+    assert!(text.contains("exact solver on 2 instances: 2 proved"), "{text}");
+    let body = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = body.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4);
+    for r in &rows {
+        // An independent check of the optimum: no algorithm may beat it.
+        let (score, optimum): (f64, f64) = (r[3].parse().unwrap(), r[4].parse().unwrap());
+        assert!(score <= optimum + 1e-9, "{r:?}");
+        assert_eq!(r[9], "exact", "{r:?}");
+        assert_eq!(r[5], r[6], "a proved optimum certifies the gap itself");
+    }
+    // Both instances' optima equal what `solve --algorithm exact` proves.
+    for seed in [4, 5] {
+        let (sol, _) = solve_json(&instances.join(format!("r{seed}.json")), &["--algorithm", "exact"]);
+        let optimum: f64 = rows.iter().find(|r| r[0] == format!("r{seed}")).unwrap()[4]
+            .parse()
+            .unwrap();
+        assert_eq!(sol["weight"].as_f64().unwrap(), optimum);
     }
 }
 
@@ -949,6 +1008,20 @@ fn quality_rejects_bad_inputs() {
         ]),
         &["--deadline-ms"],
     );
+    for bad in ["0", "-1", "soon", "NaN", "1e9"] {
+        assert_input_error(
+            &planner(&[
+                "quality",
+                "--instances",
+                path_str(&bad_json),
+                "--exact-time-limit",
+                bad,
+                "--out",
+                o,
+            ]),
+            &["--exact-time-limit", bad],
+        );
+    }
     assert!(!csv.exists(), "no CSV after a failure");
 }
 
@@ -963,4 +1036,97 @@ fn solve_takes_a_deadline() {
         &planner(&["solve", "--instance", path_str(&path), "--deadline-ms", "0"]),
         &["--deadline-ms"],
     );
+}
+
+#[test]
+fn mission_and_serve_refuse_bad_service_flags_before_starting_anything() {
+    for cmd in ["mission", "serve"] {
+        for (flag, value, needle) in [
+            ("--rt-priority", "100", "--rt-priority 100"),
+            ("--rt-priority", "-1", "--rt-priority -1"),
+            ("--drift-allowance", "-0.5", "--drift-allowance -0.5"),
+            ("--drift-allowance", "NaN", "--drift-allowance NaN"),
+            ("--reserve-s", "-1", "--reserve-s -1"),
+        ] {
+            let out = planner(&[cmd, "--nodes", "6", &format!("{flag}={value}")]);
+            assert_input_error(&out, &[needle]);
+        }
+    }
+}
+
+#[test]
+fn solve_exact_proves_an_optimum_no_heuristic_beats() {
+    let dir = scratch("exact");
+    let inst = paper_like(11);
+    let path = write_instance(&dir, "paper.json", &inst);
+    let doc: Value = serde_json::from_str(&inst.to_json()).unwrap();
+    let (sol, text) = solve_json(&path, &["--algorithm", "exact"]);
+    assert_figures_match(&doc, &sol);
+    assert_eq!(sol["algorithm"], "exact");
+    assert_eq!(sol["proved_optimal"], true, "{text}");
+    assert_eq!(sol["stop"], "converged");
+    assert_eq!(sol["gap"].as_f64(), Some(0.0));
+    assert_eq!(sol["bound"], sol["weight"]);
+    // The format's fields come first and parse as a solution object.
+    Solution::from_json(&text).unwrap();
+    for algorithm in ["auto", "pso", "bbo"] {
+        let (h, _) = solve_json(&path, &["--algorithm", algorithm, "--iterations", "30"]);
+        assert!(
+            h["weight"].as_f64().unwrap() <= sol["weight"].as_f64().unwrap(),
+            "{algorithm} beats the proved optimum: {h} vs {sol}"
+        );
+    }
+    let out = planner(&["solve", "--instance", path_str(&path), "--algorithm", "exact"]);
+    assert_ok(&out);
+    let human = stdout(&out);
+    assert!(human.contains("optimum    proved"), "{human}");
+    assert!(human.contains("gap 0.0000 %"), "{human}");
+}
+
+#[test]
+fn solve_exact_stopped_early_reports_its_bound_and_gap() {
+    let dir = scratch("exact-limit");
+    // 40 waypoints: far more than a microsecond of search.
+    let path = write_instance(&dir, "big.json", &random_instance(40, 0.45, 31_000.0, 2));
+    let (sol, text) = solve_json(&path, &["--algorithm", "exact", "--time-limit", "0.000001"]);
+    assert_eq!(sol["proved_optimal"], false, "{text}");
+    assert_eq!(sol["stop"], "deadline");
+    assert_eq!(sol["feasible"], true);
+    let (w, b, g) = (
+        sol["weight"].as_f64().unwrap(),
+        sol["bound"].as_f64().unwrap(),
+        sol["gap"].as_f64().unwrap(),
+    );
+    assert!(b >= w, "{text}");
+    assert!((g - (b - w) / w).abs() < 1e-12, "{text}");
+    let out = planner(&[
+        "solve",
+        "--instance",
+        path_str(&path),
+        "--algorithm",
+        "exact",
+        "--time-limit",
+        "0.000001",
+    ]);
+    assert_ok(&out);
+    assert!(stdout(&out).contains("NOT proved"), "{}", stdout(&out));
+}
+
+#[test]
+fn bad_input_time_limit() {
+    let dir = scratch("time-limit");
+    let path = write_instance(&dir, "ok.json", &paper_like(3));
+    let p = path_str(&path);
+    for bad in ["0", "-2", "abc", "NaN", "inf", "1e30", ""] {
+        let out = planner(&["solve", "--instance", p, "--algorithm", "exact", "--time-limit", bad]);
+        assert_input_error(&out, &["--time-limit", "seconds > 0"]);
+    }
+    for algorithm in ["auto", "pso", "bbo"] {
+        let out = planner(&["solve", "--instance", p, "--algorithm", algorithm, "--time-limit", "1"]);
+        assert_input_error(&out, &["--time-limit 1", "only --algorithm exact"]);
+    }
+    let out = planner(&["solve", "--instance", p, "--algorithm", "exact", "--deadline-ms", "5"]);
+    assert_input_error(&out, &["--deadline-ms 5", "--time-limit"]);
+    let out = planner(&["solve", "--instance", p, "--algorithm", "exact", "--iterations", "5"]);
+    assert_input_error(&out, &["--iterations 5", "--time-limit"]);
 }

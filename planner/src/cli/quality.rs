@@ -1,30 +1,49 @@
 //! `planner quality`: solves every instance in a folder with each algorithm
-//! under a deadline and reports the gap to the optimum (issue 5 §2).
+//! under each deadline and reports the gap to the optimum (issue 5 §2).
 //!
 //! Contract: instances are every `*.json` (`auv-route-instance/1`) and
 //! every classic orienteering `*.txt` file under `--instances` (recursively,
 //! sorted by path, so runs are reproducible). The optimum of an instance is
 //! taken from the first `best_known.csv` found in the folder or above it
-//! (matched by instance name); else, with `--reference-iterations N`, from
-//! a long reference search (the paper PSO and `auto` at N iterations, no
-//! deadline, and every measured result: a lower bound on the optimum, so
-//! the gap is optimistic); else it is left empty. Gaps are in percent of
-//! the optimum: lost weight for `max_weight`, extra cost for `paper_cost`.
-//! One CSV row per instance × algorithm; the summary per algorithm goes to
-//! standard output.
+//! (matched by instance name); else the exact solver computes it
+//! (score-only order, `--exact-time-limit` per instance, warm-started from
+//! the best measured route). When the exact search is stopped before its
+//! proof, the row says `exact_unproved`, `optimum` is the best route known
+//! (so `gap` is a lower bound on the true gap) and `gap_bound` is the
+//! certified upper bound on the gap from the search's bound. Gaps are in
+//! percent of the optimum: lost weight for `max_weight`, extra cost for
+//! `paper_cost`. One CSV row per instance × deadline × algorithm; the
+//! summary per deadline and algorithm goes to standard output.
+//!
+//! Every algorithm gets the same seed; `auto` runs until the deadline, PSO
+//! and BBO run the paper's budget cut at the deadline. `--clock cpu`
+//! measures deadlines and solve times in the solving thread's CPU time
+//! (steadier on a shared machine than wall-clock time, the default).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use clap::ValueEnum;
 use planner::instance::{Instance, Objective};
+use planner::montecarlo::thread_cpu_time_s;
 use planner::oplib::{BestKnown, instance_name, parse_op};
 use planner::problem::Problem;
 use planner::rng::PlannerRng;
-use planner::route::RouteEval;
-use planner::solver::{self, Algorithm, Budget};
+use planner::route::{Route, RouteEval};
+use planner::solver::exact::{ExactSettings, solve_exact};
+use planner::solver::{self, Algorithm, Budget, Solver};
 
 use super::{CliError, DEFAULT_SEED, load_instance, print, read_text, write_text};
+
+/// Which clock deadlines and solve times are measured on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Clock {
+    /// Wall-clock time (what a deadline means in service).
+    Wall,
+    /// CPU time of the solving thread (insensitive to other load).
+    Cpu,
+}
 
 /// Arguments of `planner quality`.
 #[derive(clap::Args, Debug)]
@@ -32,32 +51,77 @@ pub struct Args {
     /// Folder of instance JSON files and/or classic orienteering `.txt` files.
     #[arg(long, value_name = "DIR")]
     pub instances: PathBuf,
-    /// Wall-clock budget of each solve, in milliseconds.
-    #[arg(long, value_name = "D", default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..))]
-    pub deadline_ms: u64,
+    /// Budget of each solve in milliseconds; a comma-separated list runs
+    /// every algorithm once per deadline.
+    #[arg(long, value_name = "D", value_delimiter = ',', default_value = "20,5",
+          value_parser = clap::value_parser!(u64).range(1..=60_000))]
+    pub deadline_ms: Vec<u64>,
     /// Algorithms to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "auto,pso,bbo")]
     pub algorithms: Vec<Algorithm>,
     /// Seed of every solve.
     #[arg(long, default_value_t = DEFAULT_SEED, allow_negative_numbers = true)]
     pub seed: u64,
-    /// When an instance has no known optimum: iterations of the reference
-    /// searches whose best stands in for it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
-    pub reference_iterations: Option<u32>,
-    /// CSV file to write (one row per instance and algorithm).
+    /// Seconds the exact solver may spend on an instance without a known
+    /// optimum (> 0); past it the gap is certified by its bound only.
+    #[arg(long, value_name = "S", default_value = "30", allow_negative_numbers = true)]
+    pub exact_time_limit: String,
+    /// Clock of deadlines and solve times.
+    #[arg(long, value_enum, default_value_t = Clock::Wall)]
+    pub clock: Clock,
+    /// CSV file to write (one row per instance, deadline and algorithm).
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
+}
+
+/// Where an instance's optimum comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Optimum {
+    /// A `best_known.csv` entry.
+    Known(f64),
+    /// Proved by the exact solver.
+    Proved(f64),
+    /// The exact search stopped early: the best route known and the bound.
+    Unproved { best: f64, bound: f64 },
+    /// No optimum (no feasible route at all).
+    None,
+}
+
+impl Optimum {
+    fn value(self) -> Option<f64> {
+        match self {
+            Self::Known(v) | Self::Proved(v) | Self::Unproved { best: v, .. } => Some(v),
+            Self::None => None,
+        }
+    }
+
+    /// The value the certified gap is measured against.
+    fn bound(self) -> Option<f64> {
+        match self {
+            Self::Known(v) | Self::Proved(v) | Self::Unproved { bound: v, .. } => Some(v),
+            Self::None => None,
+        }
+    }
+
+    fn source(self) -> &'static str {
+        match self {
+            Self::Known(_) => "best_known",
+            Self::Proved(_) => "exact",
+            Self::Unproved { .. } => "exact_unproved",
+            Self::None => "none",
+        }
+    }
 }
 
 /// One solve's figures.
 struct Row {
     instance: String,
+    deadline_ms: u64,
     algorithm: Algorithm,
     score: f64,
-    optimum: Option<f64>,
-    source: &'static str,
+    optimum: Optimum,
     gap: Option<f64>,
+    gap_bound: Option<f64>,
     solve: Duration,
     feasible: bool,
 }
@@ -120,15 +184,61 @@ fn load(path: &Path) -> Result<(String, Instance), CliError> {
     }
 }
 
-/// The median and the p-th percentile (nearest rank) of `v` (sorted here).
+/// The p-th percentile (nearest rank) of `v` (sorted here).
 fn percentile(v: &mut [f64], p: f64) -> f64 {
     v.sort_by(f64::total_cmp);
     let rank = ((p / 100.0) * v.len() as f64).ceil() as usize;
     v[rank.clamp(1, v.len()) - 1]
 }
 
+/// Parses `--exact-time-limit` (seconds, finite, > 0, at most a day).
+fn parse_seconds(flag: &str, text: &str) -> Result<Duration, CliError> {
+    match text.trim().parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 && s <= 86_400.0 => Ok(Duration::from_secs_f64(s)),
+        _ => Err(CliError::Usage(format!(
+            "{flag} {text}: must be a number of seconds > 0 and at most 86400"
+        ))),
+    }
+}
+
+/// Runs `solver` within `deadline` on `clock`; returns the solve time on
+/// that clock. With the wall clock this is exactly [`solver::run`].
+fn solve_timed(
+    s: &mut dyn Solver,
+    problem: &Problem,
+    rng: &mut PlannerRng,
+    iterations: u32,
+    deadline: Duration,
+    clock: Clock,
+) -> Duration {
+    match clock {
+        Clock::Wall => {
+            let budget = Budget {
+                iterations,
+                deadline: Some(Instant::now() + deadline),
+            };
+            solver::run(s, problem, rng, None, budget).elapsed
+        }
+        Clock::Cpu => {
+            // Same loop as `solver::run`, the deadline on the thread's CPU clock.
+            let t0 = thread_cpu_time_s();
+            let end = t0 + deadline.as_secs_f64();
+            s.start(problem, rng, None);
+            let mut done = 0;
+            while done < iterations && thread_cpu_time_s() < end {
+                done += 1;
+                if !s.step(problem, rng) {
+                    break;
+                }
+            }
+            Duration::from_secs_f64((thread_cpu_time_s() - t0).max(0.0))
+        }
+    }
+}
+
 /// Runs `planner quality`.
 pub fn run(args: Args) -> Result<(), CliError> {
+    let exact_limit = parse_seconds("--exact-time-limit", &args.exact_time_limit)?;
     if !args.instances.is_dir() {
         return Err(CliError::Usage(format!(
             "--instances {}: not a folder",
@@ -146,6 +256,15 @@ pub fn run(args: Args) -> Result<(), CliError> {
             "--algorithms: name at least one of auto, pso, bbo".into(),
         ));
     }
+    let mut deadlines = Vec::new();
+    for d in &args.deadline_ms {
+        if !deadlines.contains(d) {
+            deadlines.push(*d);
+        }
+    }
+    if deadlines.is_empty() {
+        return Err(CliError::Usage("--deadline-ms: give at least one deadline".into()));
+    }
     let mut files = Vec::new();
     super::collect_files(&args.instances, &["json", "txt"], &mut files)?;
     if files.is_empty() {
@@ -156,8 +275,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let known = best_known(&args.instances)?;
     let mut solvers: Vec<_> = algorithms.iter().map(|&a| (a, a.build(a.paper_iterations()))).collect();
-    let deadline = Duration::from_millis(args.deadline_ms);
     let mut rows = Vec::new();
+    let mut exact_runs: Vec<(bool, Duration)> = Vec::new();
     for path in &files {
         let (name, inst) = load(path)?;
         let problem = Problem::from_instance(&inst).map_err(|source| CliError::Problem {
@@ -165,103 +284,144 @@ pub fn run(args: Args) -> Result<(), CliError> {
             source,
         })?;
         let mut results = Vec::new();
-        for (a, s) in &mut solvers {
-            let mut rng = PlannerRng::new(args.seed);
-            // Auto spends the whole deadline (issue 5 §2); PSO and BBO keep
-            // the paper's budget, cut by the deadline.
-            let iterations = if *a == Algorithm::Auto {
-                u32::MAX
-            } else {
-                a.paper_iterations()
-            };
-            let budget = Budget {
-                iterations,
-                deadline: Some(Instant::now() + deadline),
-            };
-            let out = solver::run(s.as_mut(), &problem, &mut rng, None, budget);
-            let e = *s.best().1;
-            results.push((*a, e, out.elapsed));
+        let mut best: Option<(Route, RouteEval)> = None;
+        for &d in &deadlines {
+            for (a, s) in &mut solvers {
+                let mut rng = PlannerRng::new(args.seed);
+                // Auto spends the whole deadline (issue 5 §2); PSO and BBO
+                // keep the paper's budget, cut by the deadline.
+                let iterations = if *a == Algorithm::Auto {
+                    u32::MAX
+                } else {
+                    a.paper_iterations()
+                };
+                let t = solve_timed(
+                    s.as_mut(),
+                    &problem,
+                    &mut rng,
+                    iterations,
+                    Duration::from_millis(d),
+                    args.clock,
+                );
+                let (r, e) = s.best();
+                if e.feasible && best.as_ref().is_none_or(|(_, b)| problem.better(e, b)) {
+                    best = Some((*r, *e));
+                }
+                results.push((d, *a, *e, t));
+            }
         }
-        let (optimum, source) = match known.as_ref().and_then(|k| k.get(&name)) {
-            Some(entry) => (Some(entry.score), "best_known"),
-            None => match args.reference_iterations {
-                Some(n) => {
-                    let mut best = results
-                        .iter()
-                        .map(|r| r.1)
-                        .fold(solver_worst(), |b, e| if problem.better(&e, &b) { e } else { b });
-                    for (a, seed) in [(Algorithm::Pso, 1), (Algorithm::Auto, 1), (Algorithm::Auto, 2)] {
-                        let mut s = a.build(n);
-                        solver::run(
-                            s.as_mut(),
-                            &problem,
-                            &mut PlannerRng::new(seed),
-                            None,
-                            Budget::iterations(n),
-                        );
-                        if problem.better(s.best().1, &best) {
-                            best = *s.best().1;
+        let optimum = match known.as_ref().and_then(|k| k.get(&name)) {
+            Some(entry) => Optimum::Known(entry.score),
+            None => {
+                let settings = ExactSettings {
+                    time_limit: Some(exact_limit),
+                    warm_start: best.map(|b| b.0),
+                    // Gaps compare objective values only.
+                    break_ties: false,
+                    ..ExactSettings::default()
+                };
+                match solve_exact(&problem, &settings) {
+                    Ok(out) => {
+                        exact_runs.push((out.proved_optimal, out.elapsed));
+                        let mut value = score(&inst, &out.eval);
+                        if let Some((_, e)) = best
+                            && problem.better(&e, &out.eval)
+                        {
+                            value = score(&inst, &e);
+                        }
+                        if out.proved_optimal {
+                            Optimum::Proved(value)
+                        } else {
+                            Optimum::Unproved {
+                                best: value,
+                                bound: out.bound,
+                            }
                         }
                     }
-                    (best.feasible.then(|| score(&inst, &best)), "reference")
+                    Err(_) => Optimum::None,
                 }
-                None => (None, ""),
-            },
+            }
         };
-        for (a, e, elapsed) in results {
+        for (d, a, e, t) in results {
             let sc = score(&inst, &e);
             rows.push(Row {
                 instance: name.clone(),
+                deadline_ms: d,
                 algorithm: a,
                 score: sc,
                 optimum,
-                source,
-                gap: optimum.map(|o| gap_percent(inst.objective, sc, o, e.feasible)),
-                solve: elapsed,
+                gap: optimum.value().map(|o| gap_percent(inst.objective, sc, o, e.feasible)),
+                gap_bound: optimum.bound().map(|o| gap_percent(inst.objective, sc, o, e.feasible)),
+                solve: t,
                 feasible: e.feasible,
             });
         }
     }
-    let mut csv = String::from("instance,algorithm,score,optimum,gap,solve_ms,feasible,optimum_source\n");
+    let mut csv =
+        String::from("instance,deadline_ms,algorithm,score,optimum,gap,gap_bound,solve_ms,feasible,optimum_source\n");
     for r in &rows {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{:.3},{},{}",
+            "{},{},{},{},{},{},{},{:.3},{},{}",
             r.instance,
+            r.deadline_ms,
             r.algorithm,
             r.score,
-            r.optimum.map_or(String::new(), |o| o.to_string()),
+            r.optimum.value().map_or(String::new(), |o| o.to_string()),
             r.gap.map_or(String::new(), |g| format!("{g:.4}")),
+            r.gap_bound.map_or(String::new(), |g| format!("{g:.4}")),
             r.solve.as_secs_f64() * 1e3,
             r.feasible,
-            r.source
+            r.optimum.source()
         );
     }
     write_text(&args.out, &csv)?;
-    print(&summary(&rows, &algorithms, files.len(), args.deadline_ms))
-}
-
-fn solver_worst() -> RouteEval {
-    RouteEval {
-        time_s: f64::INFINITY,
-        ..RouteEval::default()
+    let mut text = format!(
+        "{} instances, seed {}, {} clock\n",
+        files.len(),
+        args.seed,
+        match args.clock {
+            Clock::Wall => "wall",
+            Clock::Cpu => "thread CPU",
+        }
+    );
+    if !exact_runs.is_empty() {
+        let proved = exact_runs.iter().filter(|r| r.0).count();
+        let mut secs: Vec<f64> = exact_runs.iter().map(|r| r.1.as_secs_f64()).collect();
+        let _ = writeln!(
+            text,
+            "optimum by the exact solver on {} instances: {proved} proved, {} not proved within {} s \
+             (their gaps are lower bounds; `worst ub%` is certified); exact time median {:.3} s, max {:.3} s",
+            exact_runs.len(),
+            exact_runs.len() - proved,
+            exact_limit.as_secs_f64(),
+            percentile(&mut secs, 50.0),
+            percentile(&mut secs, 100.0),
+        );
     }
+    for &d in &deadlines {
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.deadline_ms == d).collect();
+        text.push_str(&summary(&mine, &algorithms, d));
+    }
+    print(&text)
 }
 
-/// The per-algorithm table.
-fn summary(rows: &[Row], algorithms: &[Algorithm], instances: usize, deadline_ms: u64) -> String {
-    let mut text = format!("{instances} instances, deadline {deadline_ms} ms\n");
+/// The per-algorithm table of one deadline.
+fn summary(rows: &[&Row], algorithms: &[Algorithm], deadline_ms: u64) -> String {
+    let mut text = format!("deadline {deadline_ms} ms\n");
     let _ = writeln!(
         text,
-        "{:<6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>11}",
-        "algo", "mean gap%", "med gap%", "worst%", "at opt", "median ms", "p99 ms"
+        "{:<6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>11}",
+        "algo", "mean gap%", "med gap%", "worst%", "worst ub%", "at opt", "median ms", "p99 ms"
     );
     for &a in algorithms {
-        let mine: Vec<&Row> = rows.iter().filter(|r| r.algorithm == a).collect();
+        let mine: Vec<&&Row> = rows.iter().filter(|r| r.algorithm == a).collect();
         let mut gaps: Vec<f64> = mine.iter().filter_map(|r| r.gap).collect();
+        let mut ubs: Vec<f64> = mine.iter().filter_map(|r| r.gap_bound).collect();
         let mut ms: Vec<f64> = mine.iter().map(|r| r.solve.as_secs_f64() * 1e3).collect();
-        let (mean, median, worst, at_opt) = if gaps.is_empty() {
-            ("-".to_owned(), "-".to_owned(), "-".to_owned(), "-".to_owned())
+        let (mean, median, worst, worst_ub, at_opt) = if gaps.is_empty() {
+            let dash = || "-".to_owned();
+            (dash(), dash(), dash(), dash(), dash())
         } else {
             let mean = gaps.iter().sum::<f64>() / gaps.len() as f64;
             let hits = gaps.iter().filter(|&&g| g <= 1e-6).count();
@@ -270,16 +430,18 @@ fn summary(rows: &[Row], algorithms: &[Algorithm], instances: usize, deadline_ms
                 format!("{mean:.3}"),
                 format!("{:.3}", percentile(&mut gaps, 50.0)),
                 format!("{:.3}", percentile(&mut gaps, 100.0)),
+                format!("{:.3}", percentile(&mut ubs, 100.0)),
                 at,
             )
         };
         let _ = writeln!(
             text,
-            "{:<6} {:>9} {:>9} {:>9} {:>9} {:>11.3} {:>11.3}",
+            "{:<6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11.3} {:>11.3}",
             a.as_str(),
             mean,
             median,
             worst,
+            worst_ub,
             at_opt,
             percentile(&mut ms, 50.0),
             percentile(&mut ms, 99.0)

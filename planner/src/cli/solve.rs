@@ -6,6 +6,15 @@
 //! route ([`planner::solution::Solution::new`]), not copied from the solver.
 //! The same instance, algorithm, seed and iteration count print the same
 //! output except `solve_ms`.
+//!
+//! `--algorithm exact` runs the branch-and-bound
+//! ([`planner::solver::exact::solve_exact`], the format's full order: best
+//! objective value, ties to the smaller route time) and, besides the
+//! format's fields, reports `proved_optimal`, `bound` (an upper bound on the
+//! weight, or a lower bound on the cost) and `gap` (|bound − value| / |value|,
+//! a fraction; 0 when proved). The format allows extra fields ("at least").
+//! A search stopped by `--time-limit S` reports `stop` = `deadline`; a
+//! finished one `converged`; `iterations` counts search nodes (saturating).
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -16,8 +25,9 @@ use planner::rng::PlannerRng;
 use planner::solution::{RunInfo, Solution};
 use planner::solver::auto::{AUTO_ITERATIONS, Auto};
 use planner::solver::bbo::{Bbo, BboSettings};
+use planner::solver::exact::{ExactSettings, solve_exact};
 use planner::solver::pso::{Pso, PsoSettings};
-use planner::solver::{self, Budget, Solver};
+use planner::solver::{self, Budget, SolveOutcome, Solver, StopReason};
 
 use super::{CliError, DEFAULT_SEED, load_instance, print};
 
@@ -30,14 +40,19 @@ pub enum AlgorithmArg {
     Pso,
     /// Biogeography-based optimisation (paper: 50 habitats, 10 elites).
     Bbo,
+    /// Branch-and-bound: proves the optimum, or reports a bound and gap
+    /// when `--time-limit` stops it.
+    Exact,
 }
 
 impl AlgorithmArg {
     /// Builds the solver with the paper's settings, its iteration budget
     /// replaced by `iterations` when given (so PSO's inertia schedule spans
-    /// the iterations actually run). Returns the solver and its budget.
-    pub fn build(self, iterations: Option<u32>, deadline: bool) -> (Box<dyn Solver>, u32) {
-        match self {
+    /// the iterations actually run). Returns the solver and its budget, or
+    /// `None` for `exact`, which is not an anytime swarm ([`run_exact`]).
+    pub fn build(self, iterations: Option<u32>, deadline: bool) -> Option<(Box<dyn Solver>, u32)> {
+        Some(match self {
+            Self::Exact => return None,
             Self::Auto => {
                 // Under a deadline auto's default budget is unbounded, so it
                 // uses the whole deadline (issue 5 §2).
@@ -54,7 +69,7 @@ impl AlgorithmArg {
                 s.generations = iterations.unwrap_or(s.generations);
                 (Box::new(Bbo::new(s)), s.generations)
             }
-        }
+        })
     }
 }
 
@@ -71,7 +86,7 @@ pub struct Args {
     #[arg(long, default_value_t = DEFAULT_SEED, allow_negative_numbers = true)]
     pub seed: u64,
     /// Wall-clock budget of the whole solve in milliseconds (the best route
-    /// found by then is printed).
+    /// found by then is printed); auto, pso and bbo.
     #[arg(long, value_name = "D", value_parser = clap::value_parser!(u64).range(1..))]
     pub deadline_ms: Option<u64>,
     /// Iterations (generations) to run, at least 1 [default: the paper's 150; auto: 300].
@@ -82,9 +97,28 @@ pub struct Args {
         allow_negative_numbers = true
     )]
     pub iterations: Option<u32>,
+    /// Exact only: stop the search after S seconds (> 0) and report the
+    /// best route with its bound and gap [default: run to proof].
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub time_limit: Option<String>,
     /// Print the solution object as JSON instead of a readable summary.
     #[arg(long)]
     pub json: bool,
+}
+
+/// Longest `--time-limit` accepted, s (a week: beyond that a typo is likelier
+/// than intent, and `Duration` arithmetic stays far from overflow).
+const MAX_TIME_LIMIT_S: f64 = 7.0 * 24.0 * 3600.0;
+
+/// Parses `--time-limit`: seconds, finite, > 0 and at most a week. Parsed
+/// here rather than by clap so the error is our one line.
+fn parse_time_limit(text: &str) -> Result<Duration, CliError> {
+    match text.trim().parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 && s <= MAX_TIME_LIMIT_S => Ok(Duration::from_secs_f64(s)),
+        _ => Err(CliError::Usage(format!(
+            "--time-limit {text}: must be a number of seconds > 0 and at most {MAX_TIME_LIMIT_S}"
+        ))),
+    }
 }
 
 /// Runs `planner solve`.
@@ -94,7 +128,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
         path: args.instance.clone(),
         source,
     })?;
-    let (mut solver, iterations) = args.algorithm.build(args.iterations, args.deadline_ms.is_some());
+    let Some((mut solver, iterations)) = args.algorithm.build(args.iterations, args.deadline_ms.is_some()) else {
+        return run_exact(&args, &inst, &problem);
+    };
+    if let Some(t) = &args.time_limit {
+        return Err(CliError::Usage(format!(
+            "--time-limit {t}: only --algorithm exact takes a time limit (the others take --deadline-ms D)"
+        )));
+    }
     let mut rng = PlannerRng::new(args.seed);
     let outcome = solver::run(
         solver.as_mut(),
@@ -118,5 +159,91 @@ pub fn run(args: Args) -> Result<(), CliError> {
         print(&(solution.to_json() + "\n"))
     } else {
         print(&solution.summary(&inst))
+    }
+}
+
+/// The exact solver's solution object: the format's fields, then its own.
+#[derive(serde::Serialize)]
+struct ExactSolution<'a> {
+    #[serde(flatten)]
+    solution: &'a Solution,
+    /// No feasible route is better.
+    proved_optimal: bool,
+    /// Upper bound on the weight (`max_weight`) or lower bound on the cost (`paper_cost`).
+    bound: f64,
+    /// |bound − value| / |value|, a fraction; 0 when proved.
+    gap: f64,
+}
+
+/// `planner solve --algorithm exact`.
+fn run_exact(args: &Args, inst: &planner::instance::Instance, problem: &Problem) -> Result<(), CliError> {
+    // Check every argument before the (possibly long) search.
+    let time_limit = args.time_limit.as_deref().map(parse_time_limit).transpose()?;
+    if let Some(d) = args.deadline_ms {
+        return Err(CliError::Usage(format!(
+            "--deadline-ms {d}: exact takes --time-limit S (seconds) instead"
+        )));
+    }
+    if let Some(n) = args.iterations {
+        return Err(CliError::Usage(format!(
+            "--iterations {n}: exact has no iteration budget (use --time-limit S)"
+        )));
+    }
+    let settings = ExactSettings {
+        time_limit,
+        ..ExactSettings::default()
+    };
+    let out = solve_exact(problem, &settings)
+        .map_err(|e| CliError::Usage(format!("{}: exact: {e}", args.instance.display())))?;
+    let route = out.route.to_vec();
+    let outcome = SolveOutcome {
+        iterations: u32::try_from(out.nodes_explored).unwrap_or(u32::MAX),
+        stop: if out.proved_optimal {
+            StopReason::Converged
+        } else {
+            StopReason::Deadline
+        },
+        elapsed: out.elapsed,
+    };
+    let info = RunInfo::from_outcome("exact", args.seed, &outcome);
+    let solution = Solution::new(inst, &route, &info).map_err(|e| {
+        CliError::Internal(format!(
+            "exact returned {route:?}, which is not a route of the instance: {e}"
+        ))
+    })?;
+    if args.json {
+        // The format's object plus three fields it allows ("at least").
+        let doc = ExactSolution {
+            solution: &solution,
+            proved_optimal: out.proved_optimal,
+            bound: out.bound,
+            gap: out.gap,
+        };
+        let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.to_string()))?;
+        print(&(text + "\n"))
+    } else {
+        let mut text = solution.summary(inst);
+        let what = match inst.objective {
+            planner::instance::Objective::MaxWeight => "upper bound on the weight",
+            planner::instance::Objective::PaperCost { .. } => "lower bound on the cost",
+        };
+        if out.proved_optimal {
+            text.push_str(&format!(
+                "{:<10} proved ({} search nodes)\n",
+                "optimum", out.nodes_explored
+            ));
+        } else {
+            text.push_str(&format!(
+                "{:<10} NOT proved: stopped by the time limit after {} search nodes\n",
+                "optimum", out.nodes_explored
+            ));
+        }
+        text.push_str(&format!(
+            "{:<10} {:.6} ({what}); gap {:.4} %\n",
+            "bound",
+            out.bound,
+            100.0 * out.gap
+        ));
+        print(&text)
     }
 }

@@ -75,6 +75,9 @@ pub struct Report {
     /// vehicle-sim), kB; 0 where not measured (the planner on a thread, or
     /// lockstep without --planner-process).
     pub rss_kb: [u64; 3],
+    /// SCHED_FIFO priority of the planner's service thread (None: normal
+    /// scheduling).
+    pub rt_priority: Option<i32>,
 }
 
 impl Report {
@@ -132,6 +135,7 @@ impl Report {
             "rejected_by_kind": by_kind,
             "plans_rejected_by_vehicle": self.plans_rejected_by_vehicle,
             "seed": self.seed,
+            "rt_priority": self.rt_priority,
             "planner_seed": self.planner_seed,
             "fingerprint": format!("{:016x}", self.fingerprint),
             "scenario": self.scenario,
@@ -187,7 +191,7 @@ impl Report {
              {} deadline misses (deadline {} ms), {} cut by the deadline, {} fallbacks\n\
              allocations in steady state: {} system, {} pool blocks (high water {} of {}); \
              {} sensor updates; {} rejected messages\n\
-             ({}; {}, wall time {:.1} s)",
+             ({}; {}, planner on {}, wall time {:.1} s)",
             self.time_used_s,
             self.time_available_s,
             self.tasks_completed,
@@ -215,6 +219,8 @@ impl Report {
             } else {
                 format!("{}× real time", self.time_scale)
             },
+            self.rt_priority
+                .map_or("normal scheduling".to_string(), |p| format!("SCHED_FIFO {p}")),
             self.wall_time_s
         )
     }

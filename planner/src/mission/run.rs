@@ -147,6 +147,7 @@ struct ServiceResult {
     latency_us: (u64, u64, u64),
     rejected: RejectCounters,
     last_state: Option<VehicleState>,
+    rt_priority: Option<i32>,
 }
 
 fn service_thread(
@@ -157,10 +158,10 @@ fn service_thread(
     shared: &Shared,
     rt_priority: Option<i32>,
 ) -> Result<ServiceResult, ServeError> {
-    prepare_service_thread(rt_priority)?;
+    let rt_priority = prepare_service_thread(rt_priority, cfg.cut_at_deadline)?;
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint)?;
-    let mut core = PlannerCore::new(cfg, make_solver());
+    let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
     let exit = run_service(&mut core, &mut ports, events, &mut |c: &PlannerCore| {
         shared
             .mission_time_bits
@@ -175,6 +176,7 @@ fn service_thread(
         latency_us: (h.value_at_quantile(0.5), h.value_at_quantile(0.99), h.max()),
         rejected: ports.rejected(),
         last_state: core.last_state().copied(),
+        rt_priority,
     })
 }
 
@@ -437,6 +439,9 @@ struct RunOut {
     /// Peak resident set size of each child (planner, sensor, vehicle), kB
     /// (0: not measured).
     rss_kb: [u64; 3],
+    /// SCHED_FIFO priority of the service thread (None: normal scheduling,
+    /// or not known: the planner as a child process).
+    rt_priority: Option<i32>,
 }
 
 /// How to start the simulators, where to write, and the mission's budget.
@@ -587,6 +592,7 @@ fn threaded(
         trace,
         faults: None,
         rss_kb: [0; 3],
+        rt_priority: service.rt_priority,
     })
 }
 
@@ -919,6 +925,7 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
         trace,
         faults: Some(report),
         rss_kb,
+        rt_priority: None,
     })
 }
 
@@ -948,7 +955,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let fingerprint = world.fingerprint();
     let cfg = a
         .service
-        .config(fingerprint, a.lockstep && !a.enforce_deadline)
+        .config(&world, a.lockstep && !a.enforce_deadline)
         .map_err(|e| match e {
             ServeError::Usage(u) => MissionError::Usage(u),
             other => MissionError::Serve(other),
@@ -1044,6 +1051,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         iterations_budget: cfg.iterations,
         cut: c.cut,
         rss_kb: run.rss_kb,
+        rt_priority: run.rt_priority,
     };
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();

@@ -124,6 +124,11 @@ impl MissionWorld {
         self.world.redraw_dynamic(&mut rng, &self.map)
     }
 
+    /// Expected time lost reaching each drifting waypoint, s, by node id.
+    pub fn arrival_allowances_s(&self) -> [f64; crate::problem::MAX_NODES] {
+        self.world.arrival_allowances_s(&self.map)
+    }
+
     /// The network as it stands.
     pub fn snapshot(&self) -> Instance {
         self.world.snapshot(&self.name)

@@ -69,11 +69,13 @@
 //! tasks nor the other dynamic waypoints' bounds; changing `nodes` keeps the
 //! positions of nodes below the old goal id and the tasks among them.
 
+mod chase;
 mod config;
 mod fingerprint;
 mod map;
 pub mod synthetic;
 
+pub use chase::{APPROACH_M, CHASE_TRIALS, STREAM_CHASE};
 pub use config::{ChartSource, ConfigError, MAX_K, SCENARIO_FORMAT, ScenarioConfig, UniformRange};
 pub use fingerprint::{CHART_SAMPLE_GRID, Fnv1a, fnv1a64, scenario_fingerprint};
 pub use map::{EMBEDDED_CHART_NAME, LoadError, STREAM_CHART, ScenarioMap, chart_spec, load_map, load_world};

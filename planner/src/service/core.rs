@@ -33,7 +33,7 @@ use crate::msg::{
 use crate::problem::{MAX_NODES, NodeSet, Problem, ProblemError};
 use crate::rng::{PlannerRng, derive_seed};
 use crate::route::{Route, RouteEval};
-use crate::solver::{Budget, Solver, StopReason, run};
+use crate::solver::{Algorithm, Budget, Solver, StopReason, run};
 use crate::transport::clock::mono_now_ns;
 
 /// Settings of the re-planning service; [`ServiceConfig::default`] documents each default.
@@ -55,8 +55,14 @@ pub struct ServiceConfig {
     /// waypoints drifting while the vehicle is committed to an edge (a plan
     /// that uses the budget to the second cannot absorb a longer edge).
     pub reserve_s: f64,
+    /// Expected extra time to reach each waypoint while it drifts, s, by
+    /// node id (see `scenario::chase`); added to the edges' planned times,
+    /// half at each end, so a route pays it once per drifting waypoint.
+    pub arrival_allowance_s: [f64; MAX_NODES],
     /// Seed of the planner's random draws.
     pub seed: u64,
+    /// The solver `make_solver` builds (default `auto`, issue 5).
+    pub algorithm: Algorithm,
     /// Scenario fingerprint of this process.
     pub fingerprint: u64,
     /// Plans published before the steady state begins (our choice: 1; the
@@ -78,7 +84,9 @@ impl Default for ServiceConfig {
             replan_threshold_s: 120.0,
             cut_at_deadline: true,
             reserve_s: DEFAULT_RESERVE_S,
+            arrival_allowance_s: [0.0; MAX_NODES],
             seed: 1,
+            algorithm: Algorithm::Auto,
             fingerprint: 0,
             warmup_plans: 1,
         }
@@ -488,7 +496,8 @@ impl PlannerCore {
         }
         let (start, budget, excluded) = self.planning_frame();
         let (rest, i) = self.remaining_plan()?;
-        if fill_problem(&self.snapshot, &mut self.problem, start, excluded, budget).is_err() {
+        let allowance = &self.cfg.arrival_allowance_s;
+        if fill_problem(&self.snapshot, &mut self.problem, start, excluded, budget, allowance).is_err() {
             return Some(TriggerKind::EdgeLost);
         }
         let Some(e) = self.problem.evaluate(&rest) else {
@@ -513,7 +522,8 @@ impl PlannerCore {
         let (start, budget, excluded) = self.planning_frame();
         let answered = (self.vehicle.session, self.vehicle.seq);
         let epoch = self.snapshot.epoch;
-        if let Err(e) = fill_problem(&self.snapshot, &mut self.problem, start, excluded, budget) {
+        let allowance = &self.cfg.arrival_allowance_s;
+        if let Err(e) = fill_problem(&self.snapshot, &mut self.problem, start, excluded, budget, allowance) {
             self.counters.unplannable += 1;
             self.answered_state = answered;
             self.answered_epoch = epoch;

@@ -124,13 +124,16 @@ pub fn distance_m(s: &WaypointSnapshot, a: usize, b: usize) -> f64 {
 }
 
 /// Refills `p` from a validated snapshot, starting at `start` with
-/// `budget_s` left and `excluded` nodes removed. Does not allocate.
+/// `budget_s` left and `excluded` nodes removed. Each edge's time is the
+/// format's plus half the arrival allowance of each end (zeros give exactly
+/// the format's figures). Does not allocate.
 pub fn fill_problem(
     s: &WaypointSnapshot,
     p: &mut Problem,
     start: usize,
     excluded: NodeSet,
     budget_s: f64,
+    arrival_allowance_s: &[f64; MAX_NODES],
 ) -> Result<(), ProblemError> {
     let n = (s.node_count as usize).min(MAX_NODES);
     p.begin(n, start, s.goal as usize, budget_s, objective(s), excluded)?;
@@ -141,7 +144,9 @@ pub fn fill_problem(
     for e in &s.edges[..m] {
         let (a, b) = (e.a as usize, e.b as usize);
         let d = distance_m(s, a, b);
-        p.set_edge(a, b, d, edge_time_s(d, s.speed_mps, e.task_time_s), e.priority, e.risk);
+        let allowance = 0.5 * (arrival_allowance_s[a] + arrival_allowance_s[b]);
+        let time = edge_time_s(d, s.speed_mps, e.task_time_s) + allowance;
+        p.set_edge(a, b, d, time, e.priority, e.risk);
     }
     p.finish()
 }
@@ -183,7 +188,7 @@ mod tests {
         let mut from_msg = Problem::new();
         let mut ex = NodeSet::EMPTY;
         ex.insert(3);
-        fill_problem(&s, &mut from_msg, 0, ex, 6000.0).unwrap();
+        fill_problem(&s, &mut from_msg, 0, ex, 6000.0, &[0.0; MAX_NODES]).unwrap();
         let mut from_inst = Problem::new();
         from_inst.load_instance(&inst, 0, ex, 6000.0).unwrap();
         for a in 0..30 {
@@ -201,7 +206,7 @@ mod tests {
         let mut s = boxed_zeroed::<WaypointSnapshot>();
         write_snapshot(&inst, 0, &mut s).unwrap();
         let mut p = Problem::new();
-        fill_problem(&s, &mut p, 0, NodeSet::EMPTY, inst.time_available_s).unwrap();
+        fill_problem(&s, &mut p, 0, NodeSet::EMPTY, inst.time_available_s, &[0.0; MAX_NODES]).unwrap();
         let r = Route::from_slice(&[0, 1, 2, 3]).unwrap();
         let e = p.evaluate(&r).unwrap();
         let c = RouteStats::from_instance(&inst, &[0, 1, 2, 3]).unwrap();
