@@ -1130,3 +1130,27 @@ fn bad_input_time_limit() {
     let out = planner(&["solve", "--instance", p, "--algorithm", "exact", "--iterations", "5"]);
     assert_input_error(&out, &["--iterations 5", "--time-limit"]);
 }
+
+#[test]
+fn fault_and_soak_options_out_of_range_are_one_line_errors() {
+    let dir = scratch("soak-args");
+    let out = path_str(&dir).to_string();
+    assert_input_error(&planner(&["soak", "--missions", "0", "--out", &out]), &["--missions 0"]);
+    assert_input_error(
+        &planner(&["soak", "--missions", "1", "--time-scale", "0", "--out", &out]),
+        &["--time-scale 0"],
+    );
+    assert_input_error(
+        &planner(&["mission", "--stall-timeout-ms", "1", "--out", &out]),
+        &["--stall-timeout-ms 1"],
+    );
+    assert_usage_error(
+        &planner(&["mission", "--faults", "2", "--lockstep"]),
+        &["--faults", "--lockstep"],
+    );
+    assert_usage_error(
+        &planner(&["soak", "--missions", "1", "--faults", "--lockstep", "--out", &out]),
+        &["--lockstep"],
+    );
+    assert_usage_error(&planner(&["mission", "--faults", "many"]), &["--faults"]);
+}
