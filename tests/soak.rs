@@ -1,6 +1,6 @@
 //! The short soak CI runs: three missions back to back with random faults
-//! (kills and restarts, pauses), real processes, then the leak and memory
-//! checks of `soak.json`.
+//! (kills and restarts, pauses) and bad messages of every kind, real
+//! processes, then the leak and memory checks of `soak.json`.
 
 use std::time::Duration;
 
@@ -17,6 +17,7 @@ fn a_short_soak_with_faults_completes_every_mission_and_leaks_nothing() {
             "--missions",
             "3",
             "--faults",
+            "--bad-messages",
             "--seed",
             "1",
             "--nodes",
@@ -48,6 +49,14 @@ fn a_short_soak_with_faults_completes_every_mission_and_leaks_nothing() {
     );
     assert!(cleared >= 3, "{v:#}");
     assert_eq!(v["shm_files_leaked"], 0, "{v:#}");
+    // Bad messages of every kind were sent by all three processes: every
+    // kind was rejected, and the missions still completed.
+    assert_eq!(v["bad_messages"], true);
+    let by_kind = v["rejected_messages_by_kind"].as_object().unwrap();
+    assert!(by_kind.len() >= 12, "{v:#}");
+    for (kind, n) in by_kind {
+        assert!(n.as_u64().unwrap() > 0, "no {kind} rejected: {v:#}");
+    }
     for key in [
         "reached_goal",
         "deadline_misses",

@@ -24,3 +24,4 @@ pub mod solution;
 pub mod solver;
 pub mod transport;
 pub mod truncnorm;
+pub mod wire;

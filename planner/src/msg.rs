@@ -30,7 +30,9 @@ pub const MAX_EDGES: usize = MAX_NODES * (MAX_NODES - 1) / 2;
 /// "No node" in node-id fields.
 pub const NO_NODE: u32 = u32::MAX;
 
-/// Message format version, repeated in type and service names.
+/// Oldest message format version in use. Each type carries its own version
+/// in its type and service names (v2: [`VehicleState`] and [`PlannerStatus`],
+/// which grew to 12 reject counters).
 pub const WIRE_VERSION: u32 = 1;
 
 /// The common start of every message.
@@ -178,7 +180,7 @@ pub enum Outcome {
 /// vehicle-sim → planner, sensor-sim: where the vehicle is and what it has done.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.VehicleState.v1")]
+#[type_name("auv.VehicleState.v2")]
 pub struct VehicleState {
     /// Common header; `mission_time_s` is the elapsed mission time.
     pub header: Header,
@@ -220,6 +222,9 @@ pub struct VehicleState {
     pub plans_rejected: u32,
     /// Valid entries of `route`.
     pub route_len: u32,
+    /// Input messages the vehicle rejected so far, by [`RejectKind`]
+    /// (snapshots, plans and planner status together).
+    pub rejected: [u64; REJECT_KINDS],
     /// Nodes visited so far, in order, start first.
     pub route: [u8; MAX_NODES],
 }
@@ -306,8 +311,8 @@ pub enum RejectKind {
     NodeOutOfRange = 4,
     /// A count above its capacity or an unknown enum code.
     Malformed = 5,
-    /// A plan that does not fit the network or the vehicle (non-edge,
-    /// visited node, wrong start).
+    /// A plan that does not fit the vehicle (wrong start, not ending at
+    /// the goal, or sent when no plan can be taken).
     BadPlan = 6,
     /// A waypoint on land or outside the chart.
     OffWater = 7,
@@ -315,10 +320,15 @@ pub enum RejectKind {
     OutsideBound = 8,
     /// A number outside its documented range (negative time, speed ≤ 0, …).
     OutOfRange = 9,
+    /// A plan whose route uses a pair of waypoints that is not an edge now.
+    NonEdge = 10,
+    /// A plan whose route returns to a waypoint already visited (or lists
+    /// one twice).
+    VisitedNode = 11,
 }
 
 /// Number of [`RejectKind`] counters carried in messages.
-pub const REJECT_KINDS: usize = 10;
+pub const REJECT_KINDS: usize = 12;
 
 impl RejectKind {
     /// All kinds, in counter order.
@@ -333,6 +343,8 @@ impl RejectKind {
         Self::OffWater,
         Self::OutsideBound,
         Self::OutOfRange,
+        Self::NonEdge,
+        Self::VisitedNode,
     ];
 
     /// snake_case name for reports and logs.
@@ -348,7 +360,14 @@ impl RejectKind {
             Self::OffWater => "off_water",
             Self::OutsideBound => "outside_bound",
             Self::OutOfRange => "out_of_range",
+            Self::NonEdge => "non_edge",
+            Self::VisitedNode => "visited_node",
         }
+    }
+
+    /// The kind named `name` (as [`RejectKind::as_str`] writes it).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.as_str() == name)
     }
 }
 
@@ -393,7 +412,7 @@ pub enum PlannerPhase {
 /// planner → anyone: counters and latency, sent after every handled input.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.PlannerStatus.v1")]
+#[type_name("auv.PlannerStatus.v2")]
 pub struct PlannerStatus {
     /// Common header; `mission_time_s` is the latest vehicle time seen.
     pub header: Header,
@@ -735,11 +754,18 @@ impl SeqGuard {
         }
     }
 
+    /// Checks only that `h` comes from our scenario.
+    pub fn same_scenario(&self, h: &Header) -> Result<(), RejectKind> {
+        if h.fingerprint == self.fingerprint {
+            Ok(())
+        } else {
+            Err(RejectKind::ForeignScenario)
+        }
+    }
+
     /// Checks `h`, and remembers it when accepted.
     pub fn accept(&mut self, h: &Header) -> Result<(), RejectKind> {
-        if h.fingerprint != self.fingerprint {
-            return Err(RejectKind::ForeignScenario);
-        }
+        self.same_scenario(h)?;
         if h.session == self.session && self.last_seq != 0 {
             if h.seq == self.last_seq {
                 return Err(RejectKind::Repeated);
@@ -785,6 +811,20 @@ impl RejectCounters {
         for (a, b) in self.0.iter_mut().zip(other.0) {
             *a += b;
         }
+    }
+}
+
+/// "kind count, kind count, …" for the non-zero kinds (log lines).
+impl core::fmt::Display for RejectCounters {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let mut first = true;
+        for (k, n) in RejectKind::ALL.iter().zip(self.0) {
+            if n > 0 {
+                write!(f, "{}{} {n}", if first { "" } else { ", " }, k.as_str())?;
+                first = false;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -843,9 +883,9 @@ mod tests {
                 <WaypointSnapshot as ZeroCopySend>::type_name(),
                 "auv.WaypointSnapshot.v1"
             );
-            assert_eq!(<VehicleState as ZeroCopySend>::type_name(), "auv.VehicleState.v1");
+            assert_eq!(<VehicleState as ZeroCopySend>::type_name(), "auv.VehicleState.v2");
             assert_eq!(<Plan as ZeroCopySend>::type_name(), "auv.Plan.v1");
-            assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v1");
+            assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v2");
         }
     }
 
@@ -863,7 +903,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<RawPong>(), core::mem::size_of::<Plan>());
         assert_eq!(
             core::mem::size_of::<VehicleState>(),
-            40 + 8 * 3 + 8 * 5 + 8 * 2 + 4 * 10 + MAX_NODES
+            40 + 8 * 3 + 8 * 5 + 8 * 2 + 4 * 10 + 8 * REJECT_KINDS + MAX_NODES
         );
     }
 
@@ -905,6 +945,18 @@ mod tests {
         restarted.session = 8;
         assert_eq!(g.accept(&restarted), Ok(()));
         assert_eq!(g.last(), (8, 1));
+    }
+
+    #[test]
+    fn reject_counters_print_the_non_zero_kinds() {
+        let mut r = RejectCounters::default();
+        assert_eq!(r.to_string(), "");
+        r.add(RejectKind::Repeated);
+        r.add(RejectKind::Repeated);
+        r.add(RejectKind::VisitedNode);
+        assert_eq!(r.to_string(), "repeated 2, visited_node 1");
+        assert_eq!(RejectKind::from_name("non_edge"), Some(RejectKind::NonEdge));
+        assert_eq!(RejectKind::from_name("nope"), None);
     }
 
     #[test]

@@ -9,10 +9,19 @@
 //! at an update time gets exactly one update there. It publishes epoch 0 at
 //! start and exits when the vehicle reports the end of the mission.
 //!
+//! Tests: `--inject KIND[,KIND…]` also sends, from epoch 1 on, one bad
+//! snapshot per update next to the good one (kinds in turn; see
+//! [`planner::wire`]): payload faults just before it, sequence faults just
+//! after it, so receivers still get every good update.
+//!
+//! Input: vehicle states, validated and checked against the network size;
+//! rejections are logged rate-limited and summed up on exit.
+//!
 //! Exit status: 0 at the end of the mission, 1 on an error, 2 on bad
 //! arguments, 130 when stopped by a signal.
 
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use clap::Parser;
@@ -21,8 +30,9 @@ use planner::msg::{Outcome, VehicleState, WaypointSnapshot};
 use planner::service::network::write_snapshot;
 use planner::transport::clock::mono_now_ns;
 use planner::transport::guard::Guarded;
-use planner::transport::ipc::{IpcContext, IpcOutbox, Shm, Stamp};
+use planner::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use planner::transport::{IpcArgs, Outbox, Role, Wake, Waker, signal};
+use planner::wire::{Fault, FaultCycle, FaultListError, SENSOR_FAULTS, WireRules, corrupt_snapshot, tamper_header};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -42,6 +52,12 @@ struct Args {
     /// (not epoch 0) first.
     #[arg(long, value_name = "S")]
     resume_wait_s: Option<f64>,
+    /// Tests: send a bad snapshot next to each good one from epoch 1 on,
+    /// these kinds in turn: non_finite, node_out_of_range, off_water,
+    /// outside_bound, out_of_order, repeated, foreign_scenario, malformed,
+    /// out_of_range, or all.
+    #[arg(long, value_name = "KIND[,KIND…]")]
+    inject: Option<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -58,6 +74,10 @@ enum Error {
     BadPeriod(f64),
     #[error("--resume-wait-s {0}: must be between 0 and 3600")]
     BadResumeWait(f64),
+    #[error(transparent)]
+    BadFaults(#[from] FaultListError),
+    #[error("--inject off_water: the chart has no land to put a waypoint on")]
+    NoLand,
 }
 
 /// The vehicle's clock as last reported.
@@ -85,18 +105,41 @@ fn publish(
     world: &MissionWorld,
     epoch: u64,
     period_s: f64,
+    fault: Option<(Fault, &WireRules)>,
 ) -> Result<(), Error> {
     let inst = world.snapshot();
     let mut res = Ok(());
-    out.publish(&mut |m| {
-        res = write_snapshot(&inst, epoch, m);
+    let mut good = |m: &mut WaypointSnapshot| {
+        if let Err(e) = write_snapshot(&inst, epoch, m) {
+            res = Err(e);
+        }
         m.header.mission_time_s = epoch as f64 * period_s;
         m.next_update_s = (epoch + 1) as f64 * period_s;
-    })?;
+    };
+    match fault {
+        None => {
+            out.publish(&mut good)?;
+        }
+        Some((f, _)) if f.after_good() => {
+            let seq = out.publish(&mut good)?;
+            out.publish_tampered(&mut good, &mut |m| tamper_header(f, &mut m.header, seq))?;
+        }
+        Some((f, _)) if f.in_header() => {
+            out.publish_tampered(&mut good, &mut |m| tamper_header(f, &mut m.header, 0))?;
+            out.publish(&mut good)?;
+        }
+        Some((f, rules)) => {
+            out.publish_tampered(&mut good, &mut |m| {
+                corrupt_snapshot(f, m, rules, epoch);
+            })?;
+            out.publish(&mut good)?;
+        }
+    }
     Ok(res?)
 }
 
 fn run(args: &Args) -> Result<Outcome, Error> {
+    let mut faults = FaultCycle::parse_opt("--inject", args.inject.as_deref(), &SENSOR_FAULTS)?;
     signal::install();
     let mut world = load_world(&args.scenario)?;
     let period = args.sensor_period_s.unwrap_or(world.sensor_period_s());
@@ -104,19 +147,57 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         return Err(Error::BadPeriod(period));
     }
     let fingerprint = world.fingerprint();
+    let rules = Arc::new(WireRules::new(&world));
+    if faults.iter().any(|f| f == Fault::OffWater) && rules.land_point().is_none() {
+        return Err(Error::NoLand);
+    }
     let opts = args.ipc.options()?;
     let ctx = IpcContext::<Shm>::new(&opts, "sensor-sim")?;
     let mut out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fingerprint))?;
-    let mut states = Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "sensor-sim");
+    let mut states =
+        Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "sensor-sim").with_check(rules.state_check());
     let mut waker = ctx.waker(Role::Sensor)?;
+    if let Some(wait_s) = args.resume_wait_s
+        && !(wait_s.is_finite() && (0.0..=3600.0).contains(&wait_s))
+    {
+        return Err(Error::BadResumeWait(wait_s));
+    }
+    let outcome = serve(
+        &mut world,
+        &mut out,
+        &mut states,
+        &mut waker,
+        period,
+        &rules,
+        &mut faults,
+        args.resume_wait_s,
+    );
+    let r = states.rejected();
+    if r.total() > 0 {
+        eprintln!(
+            "sensor-sim: rejected {} vehicle state message(s) in all: {r}",
+            r.total()
+        );
+    }
+    outcome
+}
+
+#[allow(clippy::too_many_arguments)]
+fn serve(
+    world: &mut MissionWorld,
+    out: &mut IpcOutbox<Shm, WaypointSnapshot>,
+    states: &mut Guarded<VehicleState, IpcInbox<Shm, VehicleState>>,
+    waker: &mut IpcWaker<Shm>,
+    period: f64,
+    rules: &WireRules,
+    faults: &mut FaultCycle,
+    resume_wait_s: Option<f64>,
+) -> Result<Outcome, Error> {
     let mut epoch = 0u64;
     let mut clock: Option<VehicleClock> = None;
     let mut outcome = Outcome::Running;
-    if let Some(wait_s) = args.resume_wait_s {
-        if !(wait_s.is_finite() && (0.0..=3600.0).contains(&wait_s)) {
-            return Err(Error::BadResumeWait(wait_s));
-        }
-        // The vehicle's state history reaches us when it next publishes.
+    if let Some(wait_s) = resume_wait_s {
+        // Restarted: the vehicle's state history reaches us when it next publishes.
         let t0 = mono_now_ns();
         while clock.is_none() && (mono_now_ns() - t0) as f64 * 1e-9 < wait_s {
             states.drain(&mut |s| {
@@ -138,7 +219,9 @@ fn run(args: &Args) -> Result<Outcome, Error> {
             eprintln!("sensor-sim: resumed at epoch {epoch}");
         }
     }
-    publish(&mut out, &world, epoch, period)?;
+    // The first snapshot always goes out clean: a receiver that joins late
+    // gets only the latest sample, and it must be a good one to start on.
+    publish(out, world, epoch, period, None)?;
     loop {
         states.drain(&mut |s| {
             clock = Some(VehicleClock {
@@ -158,7 +241,8 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         while t >= (epoch + 1) as f64 * period {
             epoch += 1;
             world.redraw(epoch);
-            publish(&mut out, &world, epoch, period)?;
+            let fault = faults.advance().map(|f| (f, rules));
+            publish(out, world, epoch, period, fault)?;
         }
         let wait = match clock {
             Some(c) if c.time_scale > 0.0 => {
@@ -186,7 +270,7 @@ fn main() -> ExitCode {
     match run(&args) {
         Ok(Outcome::Aborted) => ExitCode::from(130),
         Ok(_) => ExitCode::SUCCESS,
-        Err(e @ (Error::BadPeriod(_) | Error::BadResumeWait(_))) => {
+        Err(e @ (Error::BadPeriod(_) | Error::BadResumeWait(_) | Error::BadFaults(_) | Error::NoLand)) => {
             eprintln!("sensor-sim: error: {e}");
             ExitCode::from(2)
         }

@@ -7,20 +7,30 @@
 //! every arrival and every sensor update until the planner has answered, so
 //! the same seeds give the same mission.
 //!
+//! Input: snapshots are validated and checked against the scenario's world
+//! (waypoints over water, inside their bounds), plans against the network
+//! and the route so far (edges, unvisited waypoints); rejections are counted
+//! by kind in every state message (`rejected`) and logged rate-limited.
+//!
+//! Tests: `--inject KIND[,KIND…]` also sends one bad state next to each good
+//! one after the first (kinds in turn; see [`planner::wire`]).
+//!
 //! Exit status: 0 when the mission ended (goal or time out), 1 on an error,
 //! 2 on bad arguments, 130 when stopped by a signal.
 
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
 use planner::mission::journal::{Journal, JournalEvent, JournalSummary, Resume};
 use planner::mission::world::{ScenarioArgs, load_world};
-use planner::msg::{Outcome, Plan, PlannerStatus, VehicleEvent, VehicleState, WaypointSnapshot};
+use planner::msg::{Outcome, Plan, PlannerStatus, RejectCounters, VehicleEvent, VehicleState, WaypointSnapshot};
 use planner::transport::clock::mono_now_ns;
 use planner::transport::guard::Guarded;
 use planner::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use planner::transport::{IpcArgs, Outbox, Role, Wake, Waker, signal};
+use planner::wire::{FaultCycle, VEHICLE_FAULTS, WireRules, corrupt_state, tamper_header};
 use vehicle_sim::sim::{SimEvent, VehicleSim};
 
 #[derive(Parser, Debug)]
@@ -51,6 +61,11 @@ struct Args {
     /// the vehicle resumes from it (restart after a crash).
     #[arg(long, value_name = "FILE")]
     journal: Option<std::path::PathBuf>,
+    /// Tests: send a bad state next to each good one after the first, these
+    /// kinds in turn: non_finite, node_out_of_range, out_of_order, repeated,
+    /// foreign_scenario, malformed, out_of_range, or all.
+    #[arg(long, value_name = "KIND[,KIND…]")]
+    inject: Option<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -95,6 +110,9 @@ struct Vehicle {
     answered: Answered,
     time_scale: f64,
     journal: Option<Journal>,
+    faults: FaultCycle,
+    /// Waypoints in the network (for injected out-of-range ids).
+    n: usize,
 }
 
 impl Vehicle {
@@ -164,12 +182,46 @@ impl Vehicle {
         self.record(&e)
     }
 
+    /// Everything this vehicle rejected so far, by kind.
+    fn rejected(&self) -> RejectCounters {
+        let mut r = *self.ports.snapshots.rejected();
+        r.merge(self.ports.plans.rejected());
+        r.merge(self.ports.status.rejected());
+        r
+    }
+
+    /// Publishes the state for `event`; returns the good message's sequence
+    /// number. With `--inject`, a bad copy goes out next to it (never next
+    /// to the first or the last state).
     fn publish(&mut self, event: VehicleEvent, needs_answer: bool) -> Result<u64, Error> {
-        let (sim, scale) = (&self.sim, self.time_scale);
-        Ok(self
-            .ports
-            .state
-            .publish(&mut |m| sim.fill_state(event, scale, needs_answer, m))?)
+        let inject = !matches!(event, VehicleEvent::Start | VehicleEvent::Finished);
+        let fault = if inject { self.faults.advance() } else { None };
+        let rejected = self.rejected();
+        let (sim, scale, n) = (&self.sim, self.time_scale, self.n);
+        let mut good = |m: &mut VehicleState| {
+            sim.fill_state(event, scale, needs_answer, m);
+            m.rejected = rejected.0;
+        };
+        let out = &mut self.ports.state;
+        let seq = match fault {
+            None => out.publish(&mut good)?,
+            Some(f) if f.after_good() => {
+                let seq = out.publish(&mut good)?;
+                out.publish_tampered(&mut good, &mut |m| tamper_header(f, &mut m.header, seq))?;
+                seq
+            }
+            Some(f) if f.in_header() => {
+                out.publish_tampered(&mut good, &mut |m| tamper_header(f, &mut m.header, 0))?;
+                out.publish(&mut good)?
+            }
+            Some(f) => {
+                out.publish_tampered(&mut good, &mut |m| {
+                    corrupt_state(f, m, n);
+                })?;
+                out.publish(&mut good)?
+            }
+        };
+        Ok(seq)
     }
 
     /// Waits until `done` holds, draining inputs; `false` on shutdown.
@@ -295,9 +347,12 @@ fn run(args: &Args) -> Result<Outcome, Error> {
             args.answer_timeout_s
         )));
     }
+    let faults = FaultCycle::parse_opt("--inject", args.inject.as_deref(), &VEHICLE_FAULTS)
+        .map_err(|e| Error::Usage(e.to_string()))?;
     signal::install();
     let world = load_world(&args.scenario)?;
     let fingerprint = world.fingerprint();
+    let rules = Arc::new(WireRules::new(&world));
     drop(world);
     let opts = args.ipc.options()?;
     let ctx = IpcContext::<S>::new(&opts, "vehicle-sim")?;
@@ -305,7 +360,8 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     let ports = Ports {
         waker: ctx.waker(Role::Vehicle)?,
         state: ctx.outbox::<VehicleState>(stamp)?,
-        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "vehicle-sim"),
+        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "vehicle-sim")
+            .with_check(rules.snapshot_check()),
         plans: Guarded::new(ctx.inbox::<Plan>()?, fingerprint, "vehicle-sim"),
         status: Guarded::new(ctx.inbox::<PlannerStatus>()?, fingerprint, "vehicle-sim"),
     };
@@ -326,6 +382,8 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         answered: Answered::default(),
         time_scale: if args.lockstep { 0.0 } else { args.time_scale },
         journal,
+        faults,
+        n: rules.n(),
     };
     // The mission clock starts with the first snapshot.
     let timeout = args.answer_timeout_s;
@@ -375,6 +433,10 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         distance,
         v.sim.route()
     );
+    let r = v.rejected();
+    if r.total() > 0 {
+        eprintln!("vehicle-sim: rejected {} input message(s) in all: {r}", r.total());
+    }
     Ok(outcome)
 }
 

@@ -171,8 +171,9 @@ impl VehicleSim {
     }
 
     /// Offers a validated plan. It is taken when it starts where the vehicle
-    /// will be free, ends at the goal, and uses only edges of the latest
-    /// snapshot and waypoints not yet visited.
+    /// will be free, ends at the goal (else `BadPlan`), and uses only edges of
+    /// the latest snapshot (else `NonEdge`) and waypoints not yet visited
+    /// (else `VisitedNode`).
     pub fn offer_plan(&mut self, p: &Plan) -> Result<(), RejectKind> {
         let ids = route_ids(&p.route, p.route_len);
         let verdict = self.check_plan(ids);
@@ -208,11 +209,11 @@ impl VehicleSim {
         for (k, &id) in ids.iter().enumerate() {
             let id = id as usize;
             if seen.contains(id) || (k > 0 && self.visited.contains(id)) {
-                return Err(RejectKind::BadPlan);
+                return Err(RejectKind::VisitedNode);
             }
             seen.insert(id);
             if k > 0 && find_edge(&self.net, ids[k - 1] as usize, id).is_none() {
-                return Err(RejectKind::BadPlan);
+                return Err(RejectKind::NonEdge);
             }
         }
         Ok(())
@@ -541,7 +542,7 @@ mod tests {
         );
         assert_eq!(
             v.offer_plan(&plan(&[0, 2, 3], 2)),
-            Err(RejectKind::BadPlan),
+            Err(RejectKind::NonEdge),
             "0-2 is no edge"
         );
         assert_eq!(
@@ -555,7 +556,7 @@ mod tests {
         assert_eq!(v.step_until(105.0), None); // working at 1 until 110
         assert_eq!(
             v.offer_plan(&plan(&[1, 0, 3], 6)),
-            Err(RejectKind::BadPlan),
+            Err(RejectKind::VisitedNode),
             "0 visited"
         );
         v.offer_plan(&plan(&[1, 2, 3], 7)).unwrap();
@@ -652,7 +653,7 @@ mod tests {
         d.offer_plan(&plan(&[1, 2, 3], 2)).unwrap();
         assert_eq!(
             d.offer_plan(&plan(&[1, 0, 3], 3)),
-            Err(RejectKind::BadPlan),
+            Err(RejectKind::VisitedNode),
             "0 visited"
         );
     }

@@ -41,8 +41,10 @@ pub struct Report {
     pub allocator_installed: bool,
     /// Snapshots the planner applied.
     pub sensor_updates: u64,
-    /// Rejected input by kind (planner and vehicle).
+    /// Input the planner rejected, by kind.
     pub rejected: RejectCounters,
+    /// Input the vehicle rejected, by kind (from its last state message).
+    pub rejected_vehicle: RejectCounters,
     /// Plans the vehicle refused.
     pub plans_rejected_by_vehicle: u32,
     /// Scenario seed.
@@ -88,9 +90,12 @@ impl Report {
 
     /// The report as JSON.
     pub fn to_json(&self) -> Value {
-        let by_kind: serde_json::Map<String, Value> = (0..REJECT_KINDS)
-            .map(|k| (RejectKind::ALL[k].as_str().to_string(), json!(self.rejected.0[k])))
-            .collect();
+        let kinds = |c: &RejectCounters| -> serde_json::Map<String, Value> {
+            (0..REJECT_KINDS)
+                .map(|k| (RejectKind::ALL[k].as_str().to_string(), json!(c.0[k])))
+                .collect()
+        };
+        let all = self.all_rejected();
         json!({
             "goal_reached": self.goal_reached(),
             "outcome": super::log::outcome_name(self.outcome),
@@ -131,8 +136,12 @@ impl Report {
                 "note": "pool blocks are iceoryx2 0.10's 48 B loan state, served from a pool reserved at start-up",
             },
             "sensor_updates": self.sensor_updates,
-            "rejected_messages": self.rejected.total(),
-            "rejected_by_kind": by_kind,
+            "rejected_messages": all.total(),
+            "rejected_by_kind": kinds(&all),
+            "rejected_by_receiver": {
+                "planner": kinds(&self.rejected),
+                "vehicle": kinds(&self.rejected_vehicle),
+            },
             "plans_rejected_by_vehicle": self.plans_rejected_by_vehicle,
             "seed": self.seed,
             "rt_priority": self.rt_priority,
@@ -176,6 +185,14 @@ impl Report {
         })
     }
 
+    /// Rejections of both receivers together (a bad snapshot refused by the
+    /// planner and by the vehicle counts twice: each refused it).
+    pub fn all_rejected(&self) -> RejectCounters {
+        let mut all = self.rejected;
+        all.merge(&self.rejected_vehicle);
+        all
+    }
+
     /// A few lines for people.
     pub fn summary(&self) -> String {
         let verdict = match self.outcome {
@@ -190,7 +207,7 @@ impl Report {
              planner: {} plans ({} re-plans), latency p50 {} µs, p99 {} µs, max {} µs; \
              {} deadline misses (deadline {} ms), {} cut by the deadline, {} fallbacks\n\
              allocations in steady state: {} system, {} pool blocks (high water {} of {}); \
-             {} sensor updates; {} rejected messages\n\
+             {} sensor updates; {} rejected messages{}\n\
              ({}; {}, planner on {}, wall time {:.1} s)",
             self.time_used_s,
             self.time_available_s,
@@ -212,7 +229,15 @@ impl Report {
             self.alloc.pool_high_water,
             self.alloc.pool_capacity,
             self.sensor_updates,
-            self.rejected.total(),
+            self.all_rejected().total(),
+            {
+                let all = self.all_rejected();
+                if all.total() > 0 {
+                    format!(" ({all})")
+                } else {
+                    String::new()
+                }
+            },
             self.scenario,
             if self.lockstep {
                 "lockstep".to_string()

@@ -17,6 +17,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitCode, ExitStatus, Stdio};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -37,6 +38,7 @@ use crate::service::core::{PlannerCore, ServiceConfig, ServiceCounters, ServiceE
 use crate::service::run::{ExitReason, run_service};
 use crate::transport::ipc::{IpcContext, Shm, cleanup_dead_nodes, domain_config, leftover_files, retire_domain};
 use crate::transport::{IpcOptions, SetupError, WaitMode, signal, unique_prefix};
+use crate::wire::{FaultCycle, SENSOR_FAULTS, VEHICLE_FAULTS, WireRules};
 
 /// `planner mission` flags.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -90,6 +92,12 @@ pub struct MissionArgs {
     /// ms (the sensor gets at least three of its periods; scaled time only).
     #[arg(long, default_value_t = 1000.0)]
     pub stall_timeout_ms: f64,
+    /// Tests: passed to sensor-sim as `--inject` (bad snapshots next to good ones).
+    #[arg(long, value_name = "KIND[,KIND…]")]
+    pub inject_sensor: Option<String>,
+    /// Tests: passed to vehicle-sim as `--inject` (bad vehicle states next to good ones).
+    #[arg(long, value_name = "KIND[,KIND…]")]
+    pub inject_vehicle: Option<String>,
 }
 
 /// Why a mission failed.
@@ -150,9 +158,12 @@ struct ServiceResult {
     rt_priority: Option<i32>,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn service_thread(
     opts: &IpcOptions,
     fingerprint: u64,
+    rules: &Arc<WireRules>,
+    plan_faults: FaultCycle,
     cfg: ServiceConfig,
     events: &mut dyn FnMut(&ServiceEvent),
     shared: &Shared,
@@ -160,7 +171,7 @@ fn service_thread(
 ) -> Result<ServiceResult, ServeError> {
     let rt_priority = prepare_service_thread(rt_priority, cfg.cut_at_deadline)?;
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
-    let mut ports = open_ports(&ctx, fingerprint)?;
+    let mut ports = open_ports(&ctx, fingerprint, rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
     let exit = run_service(&mut core, &mut ports, events, &mut |c: &PlannerCore| {
         shared
@@ -449,6 +460,7 @@ struct Launch<'a> {
     out: &'a Path,
     /// Flags every process gets.
     common: &'a [String],
+    sensor_args: &'a [String],
     vehicle_args: &'a [String],
     /// Mission time budget, s.
     budget: f64,
@@ -461,10 +473,12 @@ fn threaded(
     fingerprint: u64,
     cfg: ServiceConfig,
     l: &Launch,
+    rules: Arc<WireRules>,
+    plan_faults: FaultCycle,
 ) -> Result<RunOut, MissionError> {
-    let (out, common, vehicle_args, budget) = (l.out.to_path_buf(), l.common, l.vehicle_args, l.budget);
+    let (out, vehicle_args, budget) = (l.out.to_path_buf(), l.vehicle_args, l.budget);
     let mut kids = [
-        Kid::spawn("sensor-sim", common, &out)?,
+        Kid::spawn("sensor-sim", l.sensor_args, &out)?,
         Kid::spawn("vehicle-sim", vehicle_args, &out)?,
     ];
 
@@ -496,6 +510,7 @@ fn threaded(
     let opts = &opts;
     let result = std::thread::scope(|scope| {
         let shared = &shared;
+        let rules = &rules;
         let handle = scope.spawn(move || {
             let mut events = |e: &ServiceEvent| {
                 // Never drop an event (the log must be complete): wait for room.
@@ -506,7 +521,16 @@ fn threaded(
                     std::thread::yield_now();
                 }
             };
-            let r = service_thread(opts, fingerprint, cfg, &mut events, shared, rt_priority);
+            let r = service_thread(
+                opts,
+                fingerprint,
+                rules,
+                plan_faults,
+                cfg,
+                &mut events,
+                shared,
+                rt_priority,
+            );
             alloc::end_steady_state();
             r
         });
@@ -639,7 +663,13 @@ fn restart_flags(p: Proc) -> Vec<String> {
 
 /// Runs the mission with all three as supervised child processes, injecting
 /// the faults `--faults` asks for.
-fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f64) -> Result<RunOut, MissionError> {
+fn supervised(
+    a: &MissionArgs,
+    opts: &IpcOptions,
+    l: &Launch,
+    sensor_period_s: f64,
+    fingerprint: u64,
+) -> Result<RunOut, MissionError> {
     let (out, common, vehicle_args, budget) = (l.out, l.common, l.vehicle_args, l.budget);
     let stall = Duration::from_secs_f64(a.stall_timeout_ms / 1000.0);
     let sensor_stall = if a.lockstep {
@@ -649,7 +679,7 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
     };
     let timeouts = [stall, sensor_stall, stall];
     // The monitor subscribes before anyone publishes: it sees every status.
-    let mut monitor = Monitor::new(opts, timeouts)?;
+    let mut monitor = Monitor::new(opts, timeouts, fingerprint)?;
     let mut planner_args = vec!["serve".to_string()];
     planner_args.extend(common.iter().cloned());
     planner_args.extend(a.service.to_flags());
@@ -661,7 +691,7 @@ fn supervised(a: &MissionArgs, opts: &IpcOptions, l: &Launch, sensor_period_s: f
     planner_args.extend(["--log".into(), log_path.display().to_string()]);
     let mut kids = [
         Kid::spawn_bin("planner", "planner", &planner_args, out)?,
-        Kid::spawn("sensor-sim", common, out)?,
+        Kid::spawn("sensor-sim", l.sensor_args, out)?,
         Kid::spawn("vehicle-sim", vehicle_args, out)?,
     ];
     let fault_seed = a.fault_seed.unwrap_or(a.scenario.seed);
@@ -960,6 +990,16 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
             ServeError::Usage(u) => MissionError::Usage(u),
             other => MissionError::Serve(other),
         })?;
+    let usage = |e: crate::wire::FaultListError| MissionError::Usage(e.to_string());
+    let sensor_faults =
+        FaultCycle::parse_opt("--inject-sensor", a.inject_sensor.as_deref(), &SENSOR_FAULTS).map_err(usage)?;
+    let vehicle_faults =
+        FaultCycle::parse_opt("--inject-vehicle", a.inject_vehicle.as_deref(), &VEHICLE_FAULTS).map_err(usage)?;
+    let plan_faults = a
+        .service
+        .plan_faults()
+        .map_err(|e| MissionError::Usage(e.to_string()))?;
+    let rules = Arc::new(WireRules::new(&world));
     let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
     let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
     let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
@@ -975,6 +1015,13 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     ];
     common.extend(a.scenario.to_flags());
     let mut vehicle_args = common.clone();
+    let mut sensor_args = common.clone();
+    if !sensor_faults.is_empty() {
+        sensor_args.extend(["--inject".into(), sensor_faults.to_flag_value()]);
+    }
+    if !vehicle_faults.is_empty() {
+        vehicle_args.extend(["--inject".into(), vehicle_faults.to_flag_value()]);
+    }
     if a.lockstep {
         vehicle_args.push("--lockstep".into());
     } else {
@@ -993,13 +1040,14 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let launch = Launch {
         out: &out,
         common: &common,
+        sensor_args: &sensor_args,
         vehicle_args: &vehicle_args,
         budget,
     };
     let run = if a.planner_process || a.faults > 0 {
-        supervised(a, &opts, &launch, world.sensor_period_s())
+        supervised(a, &opts, &launch, world.sensor_period_s(), fingerprint)
     } else {
-        threaded(a, opts, fingerprint, cfg, &launch)
+        threaded(a, opts, fingerprint, cfg, &launch, rules, plan_faults)
     };
     let retired = retire_domain(&prefix)?;
     let left = leftover_files(&prefix);
@@ -1015,6 +1063,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         _ => Outcome::Aborted,
     };
     let rejected_by_vehicle = last.map_or(0, |s| s.plans_rejected);
+    let rejected_vehicle = RejectCounters(last.map_or([0; crate::msg::REJECT_KINDS], |s| s.rejected));
     let c = run.totals;
     let trace = run.trace;
     let report = Report {
@@ -1036,6 +1085,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         allocator_installed: run.allocator_installed,
         sensor_updates: c.sensor_updates,
         rejected: c.rejected,
+        rejected_vehicle,
         plans_rejected_by_vehicle: rejected_by_vehicle,
         seed: a.scenario.seed,
         planner_seed: a.service.planner_seed,

@@ -13,8 +13,8 @@
 //!   (`shm_files_leaked`). Memory: the peak resident set of each child per
 //!   mission and of this process before and after, so growth from mission
 //!   to mission shows.
-//! - Bad messages: injected through the simulators' `--inject` flags (wire
-//!   branch) once they are on main: see [`bad_message_flags`].
+//! - Bad messages (`--bad-messages`): every kind, from all three senders,
+//!   through `planner mission --inject-*` ([`bad_message_flags`]).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -59,7 +59,7 @@ pub struct SoakArgs {
     /// Stall timeout, real ms.
     #[arg(long, default_value_t = 1000.0)]
     pub stall_timeout_ms: f64,
-    /// Also inject bad messages (needs the simulators' --inject flags).
+    /// Also inject bad messages of every kind from all three processes.
     #[arg(long)]
     pub bad_messages: bool,
     /// No per-mission lines.
@@ -67,14 +67,22 @@ pub struct SoakArgs {
     pub quiet: bool,
 }
 
-/// Flags that make mission `k`'s simulators send bad messages.
-///
-/// Hook: the wire branch adds `--inject-sensor KIND` / `--inject-vehicle
-/// KIND` to `planner mission`; until it is on main this returns nothing and
-/// the soak reports `bad_messages: "not available"`. Wire it here (one kind
-/// per mission, cycling through the kinds by `k`).
-pub fn bad_message_flags(_k: u32) -> Option<Vec<String>> {
-    None
+/// Flags that make mission `k`'s processes send bad messages: every kind
+/// the wire layer can inject, from the sensor (snapshots), the vehicle
+/// (states) and the planner (plans), each next to the good message it
+/// spoils (`planner mission --inject-*`, issue 4 "bad input"). The same for
+/// every mission: each kind is then rejected in every mission.
+pub fn bad_message_flags(_k: u32) -> Vec<String> {
+    [
+        "--inject-sensor",
+        "all",
+        "--inject-vehicle",
+        "all",
+        "--inject-plan",
+        "all",
+    ]
+    .map(String::from)
+    .to_vec()
 }
 
 #[derive(Parser)]
@@ -117,10 +125,8 @@ fn mission_args(a: &SoakArgs, k: u32, prefix: &str) -> Result<MissionArgs, Strin
             derive_seed(a.seed, u64::from(k)).to_string(),
         ]);
     }
-    if a.bad_messages
-        && let Some(f) = bad_message_flags(k)
-    {
-        argv.extend(f);
+    if a.bad_messages {
+        argv.extend(bad_message_flags(k));
     }
     MissionOnly::try_parse_from(argv)
         .map(|w| w.m)
@@ -174,7 +180,11 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                 deadline_misses += r.deadline_misses;
                 steady_allocs += r.alloc.sys_allocs_steady;
                 leaked += r.shm_files_left as u64;
+                // Refusals by both receivers: the planner and the vehicle.
                 for (acc, n) in rejected.iter_mut().zip(r.rejected.0) {
+                    *acc += n;
+                }
+                for (acc, n) in rejected.iter_mut().zip(r.rejected_vehicle.0) {
                     *acc += n;
                 }
                 rss_children.push(r.rss_kb);
@@ -197,7 +207,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                     "survived": f["survived_by_kind"],
                     "cleared": f["cleared_by_kind"],
                     "stalls_detected": f["stalls_detected"],
-                    "rejected_messages": r.rejected.total(),
+                    "rejected_messages": r.rejected.total() + r.rejected_vehicle.total(),
                     "deadline_misses": r.deadline_misses,
                     "steady_state_allocations": r.alloc.sys_allocs_steady,
                     "rss_kb_peak": j["rss_kb_peak"],
@@ -240,11 +250,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         "stalls_detected": stalls,
         "rejected_messages": rejected.iter().sum::<u64>(),
         "rejected_messages_by_kind": by_kind,
-        "bad_messages": if a.bad_messages && bad_message_flags(0).is_none() {
-            json!("not available: needs the simulators' --inject flags (wire branch)")
-        } else {
-            json!(a.bad_messages)
-        },
+        "bad_messages": a.bad_messages,
         "deadline_misses": deadline_misses,
         "steady_state_allocations": steady_allocs,
         "rss_kb": {

@@ -23,7 +23,9 @@ use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 
-use crate::msg::{AllocCounters, PlannerStatus, REJECT_KINDS, RejectCounters, VehicleState, WaypointSnapshot};
+use crate::msg::{
+    AllocCounters, PlannerStatus, REJECT_KINDS, RejectCounters, Validate, VehicleState, WaypointSnapshot,
+};
 use crate::rng::PlannerRng;
 use crate::transport::ipc::{IpcContext, IpcInbox, Shm};
 use crate::transport::{Inbox, IpcOptions, SetupError};
@@ -154,12 +156,15 @@ pub struct Monitor {
     latencies_us: Vec<u64>,
     last_state: Option<VehicleState>,
     last_epoch: u64,
+    /// The run's scenario: messages from elsewhere, or malformed ones (bad
+    /// input injected for tests), are not signs of life.
+    fingerprint: u64,
 }
 
 impl Monitor {
     /// Subscribes to the three topics of the run `opts` describes; a process
     /// silent for longer than `timeouts[proc]` is stalled.
-    pub fn new(opts: &IpcOptions, timeouts: [Duration; 3]) -> Result<Self, SetupError> {
+    pub fn new(opts: &IpcOptions, timeouts: [Duration; 3], fingerprint: u64) -> Result<Self, SetupError> {
         let ctx = IpcContext::<Shm>::new(opts, "supervisor")?;
         Ok(Self {
             states: ctx.inbox()?,
@@ -172,6 +177,7 @@ impl Monitor {
             latencies_us: Vec::new(),
             last_state: None,
             last_epoch: 0,
+            fingerprint,
         })
     }
 
@@ -181,20 +187,30 @@ impl Monitor {
     pub fn poll(&mut self, watch: [bool; 3], out: &mut Vec<LivenessEvent>) {
         let now = Instant::now();
         let mut heard = [false; 3];
+        let fp = self.fingerprint;
+        let good =
+            |h: &crate::msg::Header, valid: Result<(), crate::msg::RejectKind>| h.fingerprint == fp && valid.is_ok();
         let mut last_state = self.last_state;
         let _ = self.states.drain(&mut |s: &VehicleState| {
-            heard[Proc::Vehicle as usize] = true;
-            last_state = Some(*s);
+            if good(&s.header, s.validate()) {
+                heard[Proc::Vehicle as usize] = true;
+                last_state = Some(*s);
+            }
         });
         self.last_state = last_state;
         let mut epoch = self.last_epoch;
         let _ = self.snapshots.drain(&mut |s: &WaypointSnapshot| {
-            heard[Proc::Sensor as usize] = true;
-            epoch = epoch.max(s.epoch);
+            if good(&s.header, s.validate()) {
+                heard[Proc::Sensor as usize] = true;
+                epoch = epoch.max(s.epoch);
+            }
         });
         self.last_epoch = epoch;
         let (sessions, latencies) = (&mut self.sessions, &mut self.latencies_us);
         let _ = self.status.drain(&mut |s: &PlannerStatus| {
+            if !good(&s.header, s.validate()) {
+                return;
+            }
             heard[Proc::Planner as usize] = true;
             match sessions.iter_mut().find(|x| x.header.session == s.header.session) {
                 Some(prev) => {

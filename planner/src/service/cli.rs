@@ -3,6 +3,7 @@
 
 use std::path::Path;
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::alloc;
@@ -15,6 +16,7 @@ use crate::solver::{Algorithm, Solver};
 use crate::transport::guard::Guarded;
 use crate::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use crate::transport::{IpcArgs, Role, SetupError, TransportError, signal};
+use crate::wire::{FaultCycle, PLAN_FAULTS, WireRules};
 
 /// Flags of the planning service (shared by `serve` and `mission`).
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -50,6 +52,10 @@ pub struct ServiceArgs {
     /// normal scheduling with --spin or in lockstep (nothing is cut there).
     #[arg(long, value_name = "PRIO")]
     pub rt_priority: Option<i32>,
+    /// Tests: also send a bad plan before each good one, taking these kinds
+    /// in turn (non_edge, visited_node, bad_plan, or all); the vehicle must refuse them.
+    #[arg(long, value_name = "KIND[,KIND…]")]
+    pub inject_plan: Option<String>,
 }
 
 /// SCHED_FIFO priority the service asks for by default (our choice: low
@@ -122,6 +128,9 @@ impl ServiceArgs {
         if let Some(p) = self.rt_priority {
             f.extend(["--rt-priority".into(), p.to_string()]);
         }
+        if let Some(k) = &self.inject_plan {
+            f.extend(["--inject-plan".into(), k.clone()]);
+        }
         f
     }
 
@@ -145,6 +154,7 @@ impl ServiceArgs {
                 self.reserve_s
             )));
         }
+        self.plan_faults()?;
         if let Some(p) = self.rt_priority.filter(|p| !(0..=99).contains(p)) {
             return Err(ServeError::Usage(format!(
                 "--rt-priority {p}: must be between 0 and 99"
@@ -175,6 +185,14 @@ impl ServiceArgs {
     }
 }
 
+impl ServiceArgs {
+    /// The plan faults `--inject-plan` asks for (none without the flag).
+    pub fn plan_faults(&self) -> Result<FaultCycle, ServeError> {
+        FaultCycle::parse_opt("--inject-plan", self.inject_plan.as_deref(), &PLAN_FAULTS)
+            .map_err(|e| ServeError::Usage(e.to_string()))
+    }
+}
+
 /// The solver the service runs: `auto` by default (issue 5), or the paper's
 /// PSO (150 particles, inertia schedule over the paper's 150 iterations) or
 /// BBO. The iteration budget per re-plan comes from the service
@@ -192,15 +210,23 @@ pub type ShmPlannerPorts = PlannerPorts<
     IpcOutbox<Shm, PlannerStatus>,
 >;
 
-/// Opens the planner's ports in the context's domain.
-pub fn open_ports(ctx: &IpcContext<Shm>, fingerprint: u64) -> Result<ShmPlannerPorts, SetupError> {
+/// Opens the planner's ports in the context's domain; inputs are checked
+/// against `rules` (the scenario's world) besides their own validation.
+pub fn open_ports(
+    ctx: &IpcContext<Shm>,
+    fingerprint: u64,
+    rules: &Arc<WireRules>,
+    inject_plans: FaultCycle,
+) -> Result<ShmPlannerPorts, SetupError> {
     let stamp = Stamp::new(fingerprint);
     Ok(PlannerPorts {
         waker: ctx.waker(Role::Planner)?,
-        states: Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "planner"),
-        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "planner"),
+        states: Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "planner").with_check(rules.state_check()),
+        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "planner")
+            .with_check(rules.snapshot_check()),
         plans: ctx.outbox::<Plan>(stamp)?,
         status: ctx.outbox::<PlannerStatus>(stamp)?,
+        inject_plans,
     })
 }
 
@@ -247,12 +273,14 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     signal::install();
     let world = load_world(&args.scenario)?;
     let fingerprint = world.fingerprint();
+    let rules = Arc::new(WireRules::new(&world));
     let cfg = args.service.config(&world, args.lockstep)?;
+    let plan_faults = args.service.plan_faults()?;
     drop(world);
     let opts = args.ipc.options()?;
     prepare_service_thread(args.service.rt_priority, !args.ipc.spin && !args.lockstep)?;
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
-    let mut ports = open_ports(&ctx, fingerprint)?;
+    let mut ports = open_ports(&ctx, fingerprint, &rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
     let exit = with_log_writer(args.log.as_deref(), |events: &mut dyn FnMut(&ServiceEvent)| {
         run_service(&mut core, &mut ports, events, &mut |_| true)
@@ -278,6 +306,10 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
         a.pool_allocs_steady,
         a.pool_high_water
     );
+    let r = ports.rejected();
+    if r.total() > 0 {
+        eprintln!("planner: rejected {} input message(s) in all: {r}", r.total());
+    }
     Ok(exit)
 }
 

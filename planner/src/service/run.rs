@@ -11,11 +11,13 @@
 use core::time::Duration;
 
 use super::alloc;
-use super::core::{PlannerCore, ServiceEvent};
-use crate::msg::{Plan, PlannerStatus, RejectCounters, VehicleState, WaypointSnapshot};
+use super::core::{PlanResult, PlannerCore, ServiceEvent};
+use crate::msg::{Plan, PlannerStatus, RejectCounters, VehicleState, WaypointSnapshot, route_ids};
+use crate::problem::MAX_NODES;
 use crate::transport::clock::mono_now_ns;
 use crate::transport::guard::Guarded;
 use crate::transport::{Inbox, Outbox, TransportError, Wake, Waker};
+use crate::wire::{FaultCycle, bad_route};
 
 /// Longest idle wait before the loop looks at shutdown and heartbeat.
 pub const IDLE_WAIT: Duration = Duration::from_millis(50);
@@ -42,6 +44,8 @@ where
     pub plans: OP,
     /// Status out.
     pub status: OS,
+    /// Bad plans to send next to good ones (tests: `--inject-plan`); none normally.
+    pub inject_plans: FaultCycle,
 }
 
 /// Why the loop returned.
@@ -68,6 +72,25 @@ where
         let mut r = *self.states.rejected();
         r.merge(self.snapshots.rejected());
         r
+    }
+
+    /// With plan injection on: sends a bad variant of the plan for `r`
+    /// (through a non-edge or a visited waypoint) before the good one. A
+    /// fault that cannot be built yet (nothing visited) is skipped.
+    fn inject_plan(&mut self, core: &PlannerCore, r: &PlanResult) -> Result<(), TransportError> {
+        let (Some(fault), Some(snap)) = (self.inject_plans.advance(), core.snapshot()) else {
+            return Ok(());
+        };
+        let visited = core.last_state().map_or(&[][..], |s| route_ids(&s.route, s.route_len));
+        let mut bad = [0u8; MAX_NODES];
+        if let Some(len) = bad_route(fault, r.route.as_bytes(), snap, visited, &mut bad) {
+            self.plans.publish(&mut |m: &mut Plan| {
+                core.fill_plan(r, m);
+                m.route = bad;
+                m.route_len = len as u32;
+            })?;
+        }
+        Ok(())
     }
 
     fn publish_status(&mut self, core: &PlannerCore) -> Result<(), TransportError> {
@@ -145,6 +168,9 @@ where
         if let Some(result) = core.replan() {
             handled += 1;
             if let Ok(r) = result {
+                if !ports.inject_plans.is_empty() {
+                    ports.inject_plan(core, &r)?;
+                }
                 ports.plans.publish(&mut |m: &mut Plan| core.fill_plan(&r, m))?;
                 core.published(&r, mono_now_ns(), events);
                 // Warm-up ends after the status that follows this plan: the
@@ -188,6 +214,7 @@ mod tests {
             snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>().unwrap(), fp, "planner"),
             plans: ctx.outbox::<Plan>(Stamp::new(fp)).unwrap(),
             status: ctx.outbox::<PlannerStatus>(Stamp::new(fp)).unwrap(),
+            inject_plans: FaultCycle::NONE,
         };
         // The peers: a sensor, a vehicle, and one foreign sender.
         let mut snap_out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();

@@ -225,8 +225,24 @@ pub struct IpcOutbox<S: Service, T: OnTopic> {
     seq: u64,
 }
 
-impl<S: Service, T: OnTopic> Outbox<T> for IpcOutbox<S, T> {
-    fn publish(&mut self, fill: &mut dyn FnMut(&mut T)) -> Result<u64, TransportError> {
+impl<S: Service, T: OnTopic> IpcOutbox<S, T> {
+    /// Like [`Outbox::publish`], then lets `tamper` rewrite the stamped
+    /// message (its header included) before it is sent: fault injection for
+    /// tests (`--inject`), e.g. a repeated sequence number or another
+    /// scenario's fingerprint. The sequence counter advances as usual.
+    pub fn publish_tampered(
+        &mut self,
+        fill: &mut dyn FnMut(&mut T),
+        tamper: &mut dyn FnMut(&mut T),
+    ) -> Result<u64, TransportError> {
+        self.send_one(fill, Some(tamper))
+    }
+
+    fn send_one(
+        &mut self,
+        fill: &mut dyn FnMut(&mut T),
+        tamper: Option<&mut dyn FnMut(&mut T)>,
+    ) -> Result<u64, TransportError> {
         let topic = T::TOPIC.leaf();
         let mut sample = self
             .publisher
@@ -246,6 +262,9 @@ impl<S: Service, T: OnTopic> Outbox<T> for IpcOutbox<S, T> {
         h.session = self.stamp.session;
         h.fingerprint = self.stamp.fingerprint;
         h.sent_mono_ns = clock::mono_now_ns();
+        if let Some(t) = tamper {
+            t(m);
+        }
         sample.send().map_err(|_| TransportError::Send { topic })?;
         let id = EventId::new(T::TOPIC.event_id());
         for n in &self.notifiers {
@@ -253,6 +272,12 @@ impl<S: Service, T: OnTopic> Outbox<T> for IpcOutbox<S, T> {
                 .map_err(|_| TransportError::Notify { topic })?;
         }
         Ok(self.seq)
+    }
+}
+
+impl<S: Service, T: OnTopic> Outbox<T> for IpcOutbox<S, T> {
+    fn publish(&mut self, fill: &mut dyn FnMut(&mut T)) -> Result<u64, TransportError> {
+        self.send_one(fill, None)
     }
 
     fn refresh(&mut self) {

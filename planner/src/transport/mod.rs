@@ -17,9 +17,9 @@
 //! | topic | service name | from → to |
 //! |---|---|---|
 //! | waypoints | `auv/<vehicle>/sensor/waypoints/v1` | sensor → planner, vehicle |
-//! | vehicle state | `auv/<vehicle>/vehicle/state/v1` | vehicle → planner, sensor |
+//! | vehicle state | `auv/<vehicle>/vehicle/state/v2` | vehicle → planner, sensor |
 //! | plan | `auv/<vehicle>/planner/plan/v1` | planner → vehicle |
-//! | planner status | `auv/<vehicle>/planner/status/v1` | planner → vehicle |
+//! | planner status | `auv/<vehicle>/planner/status/v2` | planner → vehicle |
 //!
 //! Wake services: `auv/<vehicle>/<role>/wake/v1`.
 
@@ -54,9 +54,9 @@ impl Topic {
     pub fn leaf(self) -> &'static str {
         match self {
             Self::Waypoints => "sensor/waypoints/v1",
-            Self::VehicleState => "vehicle/state/v1",
+            Self::VehicleState => "vehicle/state/v2",
             Self::Plan => "planner/plan/v1",
-            Self::Status => "planner/status/v1",
+            Self::Status => "planner/status/v2",
             Self::BenchPing => "bench/ping/v1",
             Self::BenchPong => "bench/pong/v1",
         }
