@@ -35,7 +35,7 @@ enum Command {
     Export(cli::export::Args),
     /// Convert classic orienteering benchmark files (Tsiligirides, Chao) into instance JSON.
     ConvertOp(cli::convert_op::Args),
-    /// Run the paper's Monte Carlo study: PSO and BBO on many network changes.
+    /// Run the paper's Monte Carlo study: PSO and BBO (and optionally auto) on many network changes.
     Montecarlo(cli::montecarlo::Args),
     /// Gap to the optimum and solve time of each algorithm on a folder of instances.
     Quality(cli::quality::Args),

@@ -1154,3 +1154,63 @@ fn fault_and_soak_options_out_of_range_are_one_line_errors() {
     );
     assert_usage_error(&planner(&["mission", "--faults", "many"]), &["--faults"]);
 }
+
+#[test]
+fn montecarlo_includes_auto_next_to_pso_and_bbo() {
+    let dir = scratch("montecarlo-auto");
+    let out_dir = dir.join("out");
+    let out = planner(&[
+        "montecarlo",
+        "--runs",
+        "2",
+        "--nodes",
+        "12",
+        "--algorithms",
+        "pso,bbo,auto",
+        "--threads",
+        "1",
+        "--out",
+        path_str(&out_dir),
+    ]);
+    assert_ok(&out);
+    assert!(stdout(&out).contains("auto"), "{}", stdout(&out));
+    let csv = std::fs::read_to_string(out_dir.join("runs.csv")).unwrap();
+    let algorithms: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').nth(1).unwrap()).collect();
+    assert_eq!(algorithms, ["pso", "bbo", "auto", "pso", "bbo", "auto"]);
+    for row in csv.lines().skip(1) {
+        assert!(row.ends_with(",true"), "infeasible: {row}");
+    }
+}
+
+#[test]
+fn quality_certifies_a_gap_bound_when_the_exact_search_is_cut() {
+    let dir = scratch("quality-unproved");
+    let instances = dir.join("instances");
+    std::fs::create_dir_all(&instances).unwrap();
+    write_instance(&instances, "big.json", &random_instance(40, 0.45, 31_000.0, 2));
+    let csv = dir.join("q.csv");
+    let out = planner(&[
+        "quality",
+        "--instances",
+        path_str(&instances),
+        "--deadline-ms",
+        "2",
+        "--algorithms",
+        "bbo",
+        "--exact-time-limit",
+        "0.000001",
+        "--out",
+        path_str(&csv),
+    ]);
+    assert_ok(&out);
+    let text = stdout(&out);
+    assert!(text.contains("0 proved, 1 not proved"), "{text}");
+    let body = std::fs::read_to_string(&csv).unwrap();
+    let row: Vec<&str> = body.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(row[9], "exact_unproved");
+    let (gap, bound): (f64, f64) = (row[5].parse().unwrap(), row[6].parse().unwrap());
+    assert!(
+        gap >= 0.0 && bound > gap,
+        "the bound's gap must exceed the best route's: {row:?}"
+    );
+}

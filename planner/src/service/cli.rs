@@ -329,3 +329,36 @@ pub fn run_serve(args: &ServeArgs) -> ExitCode {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        service: ServiceArgs,
+    }
+
+    #[test]
+    fn the_service_plans_with_auto_unless_told_otherwise() {
+        let world = crate::mission::world::load_world(&crate::mission::world::ScenarioArgs {
+            seed: 1,
+            scenario: None,
+            nodes: Some(12),
+            time_available_s: None,
+        })
+        .unwrap();
+        let default = Cli::try_parse_from(["x"]).unwrap().service;
+        assert_eq!(default.algorithm, Algorithm::Auto);
+        let cfg = default.config(&world, false).unwrap();
+        assert_eq!(cfg.algorithm, Algorithm::Auto);
+        assert_eq!(make_solver(cfg.algorithm).name(), "auto");
+        for (flag, name) in [("pso", "pso"), ("bbo", "bbo"), ("auto", "auto")] {
+            let args = Cli::try_parse_from(["x", "--algorithm", flag]).unwrap().service;
+            assert_eq!(make_solver(args.config(&world, true).unwrap().algorithm).name(), name);
+        }
+        assert!(Cli::try_parse_from(["x", "--algorithm", "exact"]).is_err());
+    }
+}
