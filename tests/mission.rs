@@ -5,7 +5,7 @@
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use auv_system::{binary, leftovers, prefix, read_json, run, temp_dir, wait_with_watchdog};
+use auv_system::{binary, journal_totals, leftovers, prefix, read_json, run, temp_dir, wait_with_watchdog};
 
 const LIMIT: Duration = Duration::from_secs(240);
 
@@ -19,6 +19,20 @@ fn shared() -> std::sync::RwLockReadGuard<'static, ()> {
 
 /// A finished mission: its report, its log's bytes, its iceoryx2 prefix.
 type Finished = (serde_json::Value, Vec<u8>, String);
+
+/// The report's tasks, weight and route are the journal's.
+fn assert_report_matches_journal(r: &serde_json::Value, out: &std::path::Path) {
+    let (tasks, weight, route) = journal_totals(&out.join("journal.jsonl"));
+    assert_eq!(r["tasks_completed"].as_u64(), Some(tasks), "{r:#}");
+    assert_eq!(r["weight"].as_f64(), Some(weight), "{r:#}");
+    let reported: Vec<u64> = r["route"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|v| v.as_u64())
+        .collect();
+    assert_eq!(reported, route, "{r:#}");
+}
 
 /// Runs a lockstep mission; `Err((exit code, stderr))` when it fails.
 fn try_lockstep_mission(
@@ -52,6 +66,7 @@ fn try_lockstep_mission(
         return Err((o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned()));
     }
     let report = read_json(&out.join("report.json"));
+    assert_report_matches_journal(&report, &out);
     let log = std::fs::read(out.join("mission.log")).expect("mission.log");
     assert!(out.join("mission.svg").is_file(), "no plot");
     Ok((report, log, p))
@@ -115,6 +130,10 @@ fn same_seeds_give_a_byte_identical_mission_log() {
     assert!(a == b, "two lockstep runs with the same seeds wrote different logs");
     let (_, c, _) = lockstep_mission(4, 7, 10, &[]);
     assert!(a != c, "another scenario seed should give another mission");
+    // The planner as a child process (`planner serve`) writes the same log.
+    let (r, d, _) = lockstep_mission(3, 7, 10, &["--planner-process"]);
+    assert_eq!(r["planner_process"], true);
+    assert!(a == d, "the planner as a child process wrote another log");
 }
 
 #[test]
@@ -298,4 +317,182 @@ fn bench_latency_reports_both_distributions_as_json() {
     assert!(v["deadline_misses"].as_u64().is_some());
     assert_eq!(v["planner"]["steady_state_allocations"], 0, "{v:#}");
     assert_eq!(v["shm_leftovers"], 0);
+}
+
+#[test]
+fn killed_and_paused_processes_are_restarted_or_detected_and_the_report_adds_up() {
+    let _shared = shared();
+    // Fault seed 3 on this scenario: the planner killed once, the vehicle
+    // killed three times, the sensor paused twice (drawn from the seed).
+    let out = temp_dir("f");
+    let p = prefix("t");
+    let out_s = out.display().to_string();
+    let o = run(
+        &binary("planner"),
+        &[
+            "mission",
+            "--quiet",
+            "--faults",
+            "6",
+            "--fault-seed",
+            "3",
+            "--nodes",
+            "12",
+            "--seed",
+            "2",
+            "--time-scale",
+            "3000",
+            "--stall-timeout-ms",
+            "600",
+            "--ipc-prefix",
+            &p,
+            "--out",
+            &out_s,
+        ],
+        LIMIT,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_json(&out.join("report.json"));
+    assert!(r["outcome"] == "goal_reached" || r["outcome"] == "timed_out", "{r:#}");
+    assert_report_matches_journal(&r, &out);
+    let f = &r["faults"];
+    assert_eq!(f["planned"], 6, "{f:#}");
+    assert_eq!(f["injected"], 6, "{f:#}");
+    // Every fault injected was cleared: restarted processes were heard from
+    // again, paused ones were detected and heard from again.
+    assert_eq!(f["injected_by_kind"], f["survived_by_kind"], "{f:#}");
+    assert_eq!(f["injected_by_kind"], f["cleared_by_kind"], "{f:#}");
+    assert_eq!(f["cut_short_by_end"], 0, "{f:#}");
+    for key in ["kill_planner", "kill_vehicle-sim", "pause_sensor-sim"] {
+        assert!(f["injected_by_kind"][key].as_u64().unwrap_or(0) > 0, "{key}: {f:#}");
+    }
+    let pauses = f["injected_by_kind"]["pause_sensor-sim"].as_u64().unwrap();
+    assert!(f["stalls_detected"]["sensor-sim"].as_u64().unwrap() >= pauses, "{f:#}");
+    // Each restarted vehicle resumed from the journal.
+    assert_eq!(r["vehicle_restarts"], f["restarts"]["vehicle-sim"], "{r:#}");
+    let planners = f["restarts"]["planner"].as_u64().unwrap();
+    assert!(planners >= 1);
+    assert_eq!(r["shm_files_left"], 0);
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+    let flog = std::fs::read_to_string(out.join("faults.log")).unwrap();
+    assert!(flog.contains("\"stall_detected\""), "{flog}");
+}
+
+/// Busy-loop processes that keep every core busy until dropped.
+struct BusyLoops(Vec<std::process::Child>);
+
+impl BusyLoops {
+    fn start(n: usize) -> Self {
+        Self(
+            (0..n)
+                .map(|_| {
+                    Command::new("sh")
+                        .args(["-c", "while :; do :; done"])
+                        .stdin(Stdio::null())
+                        .stdout(Stdio::null())
+                        .spawn()
+                        .expect("start a busy loop")
+                })
+                .collect(),
+        )
+    }
+}
+
+impl Drop for BusyLoops {
+    fn drop(&mut self) {
+        for c in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+#[test]
+fn under_overload_every_plan_is_cut_to_its_deadline_and_the_cost_is_reported() {
+    let _alone = EXCLUSIVE.write().unwrap_or_else(|e| e.into_inner());
+    // Both cores busy with other work; an iteration budget that no solve
+    // finishes within 20 ms; the service thread SCHED_FIFO where permitted.
+    let args = [
+        "--enforce-deadline",
+        "--deadline-ms",
+        "20",
+        // The paper's PSO: its iteration budget is what the deadline cuts
+        // (auto stops by itself on a network this small).
+        "--algorithm",
+        "pso",
+        "--iterations",
+        "3000",
+        "--time-available-s",
+        "6000",
+    ];
+    let mut rt = args.to_vec();
+    rt.extend(["--rt-priority", "10"]);
+    let busy = BusyLoops::start(2);
+    let (r, realtime) = match try_lockstep_mission(5, 1, 10, &rt) {
+        Ok((r, _, _)) => (r, true),
+        Err((Some(2), err)) if err.contains("SCHED_FIFO refused") => (lockstep_mission(5, 1, 10, &args).0, false),
+        Err((code, err)) => panic!("mission failed ({code:?}):\n{err}"),
+    };
+    drop(busy);
+    let plans = r["plans"].as_u64().unwrap();
+    let a = &r["anytime"];
+    assert_eq!(a["measured"], true, "{a:#}");
+    assert_eq!(a["plans_cut"], plans, "every solve is cut: {r:#}");
+    let mean_cut = a["mean_iterations_cut"].as_f64().unwrap();
+    assert!((1.0..3000.0).contains(&mean_cut), "{a:#}");
+    assert_eq!(a["iterations_budget"], 3000);
+    assert!(a["mean_weight_cut"].as_f64().is_some() && a["mean_weight_warm_start"].as_f64().is_some());
+    if realtime {
+        assert_eq!(r["deadline_misses"], 0, "{r:#}");
+    }
+    eprintln!(
+        "overload: {plans} plans, all cut, mean {mean_cut:.0} of 3000 iterations, weight of cut plans {} vs their warm starts {}, mission weight {}, deadline misses {} (realtime {realtime})",
+        a["mean_weight_cut"], a["mean_weight_warm_start"], r["weight"], r["deadline_misses"]
+    );
+}
+
+#[test]
+fn a_new_run_cleans_up_what_a_killed_run_left_in_its_domain() {
+    let _shared = shared();
+    let p = prefix("t");
+    // A planner killed with SIGKILL leaves its dead node's files behind.
+    let mut serve = Command::new(binary("planner"))
+        .args(["serve", "--nodes", "10", "--lockstep", "--ipc-prefix", &p])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start planner serve");
+    let t0 = std::time::Instant::now();
+    while leftovers(&p).len() < 3 {
+        assert!(t0.elapsed() < LIMIT, "planner serve created nothing");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    serve.kill().unwrap();
+    serve.wait().unwrap();
+    assert!(!leftovers(&p).is_empty(), "a SIGKILL leaves files");
+    // A mission in the same domain cleans them up at start and leaves nothing.
+    let out = temp_dir("d");
+    let out_s = out.display().to_string();
+    let o = run(
+        &binary("planner"),
+        &[
+            "mission",
+            "--lockstep",
+            "--quiet",
+            "--nodes",
+            "10",
+            "--ipc-prefix",
+            &p,
+            "--out",
+            &out_s,
+        ],
+        LIMIT,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_json(&out.join("report.json"));
+    assert_eq!(r["goal_reached"], true, "{r:#}");
+    assert_eq!(r["shm_files_left"], 0, "{r:#}");
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
 }

@@ -1132,6 +1132,30 @@ fn bad_input_time_limit() {
 }
 
 #[test]
+fn fault_and_soak_options_out_of_range_are_one_line_errors() {
+    let dir = scratch("soak-args");
+    let out = path_str(&dir).to_string();
+    assert_input_error(&planner(&["soak", "--missions", "0", "--out", &out]), &["--missions 0"]);
+    assert_input_error(
+        &planner(&["soak", "--missions", "1", "--time-scale", "0", "--out", &out]),
+        &["--time-scale 0"],
+    );
+    assert_input_error(
+        &planner(&["mission", "--stall-timeout-ms", "1", "--out", &out]),
+        &["--stall-timeout-ms 1"],
+    );
+    assert_usage_error(
+        &planner(&["mission", "--faults", "2", "--lockstep"]),
+        &["--faults", "--lockstep"],
+    );
+    assert_usage_error(
+        &planner(&["soak", "--missions", "1", "--faults", "--lockstep", "--out", &out]),
+        &["--lockstep"],
+    );
+    assert_usage_error(&planner(&["mission", "--faults", "many"]), &["--faults"]);
+}
+
+#[test]
 fn montecarlo_includes_auto_next_to_pso_and_bbo() {
     let dir = scratch("montecarlo-auto");
     let out_dir = dir.join("out");

@@ -47,6 +47,11 @@ struct Args {
     /// Mission time between sensor updates, s (default: the scenario's).
     #[arg(long)]
     sensor_period_s: Option<f64>,
+    /// Restart after a crash: wait up to this many real seconds for the
+    /// vehicle's latest state and publish the snapshot of its mission time
+    /// (not epoch 0) first.
+    #[arg(long, value_name = "S")]
+    resume_wait_s: Option<f64>,
     /// Tests: send a bad snapshot next to each good one from epoch 1 on,
     /// these kinds in turn: non_finite, node_out_of_range, off_water,
     /// outside_bound, out_of_order, repeated, foreign_scenario, malformed,
@@ -67,6 +72,8 @@ enum Error {
     Snapshot(#[from] planner::service::network::SnapshotError),
     #[error("--sensor-period-s {0}: must be > 0")]
     BadPeriod(f64),
+    #[error("--resume-wait-s {0}: must be between 0 and 3600")]
+    BadResumeWait(f64),
     #[error(transparent)]
     BadFaults(#[from] FaultListError),
     #[error("--inject off_water: the chart has no land to put a waypoint on")]
@@ -150,9 +157,11 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     let mut states =
         Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "sensor-sim").with_check(rules.state_check());
     let mut waker = ctx.waker(Role::Sensor)?;
-    // Epoch 0 always goes out clean: a receiver that joins late gets only
-    // the latest sample, and it must be a good one to start the mission.
-    publish(&mut out, &world, 0, period, None)?;
+    if let Some(wait_s) = args.resume_wait_s
+        && !(wait_s.is_finite() && (0.0..=3600.0).contains(&wait_s))
+    {
+        return Err(Error::BadResumeWait(wait_s));
+    }
     let outcome = serve(
         &mut world,
         &mut out,
@@ -161,6 +170,7 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         period,
         &rules,
         &mut faults,
+        args.resume_wait_s,
     );
     let r = states.rejected();
     if r.total() > 0 {
@@ -181,10 +191,37 @@ fn serve(
     period: f64,
     rules: &WireRules,
     faults: &mut FaultCycle,
+    resume_wait_s: Option<f64>,
 ) -> Result<Outcome, Error> {
     let mut epoch = 0u64;
     let mut clock: Option<VehicleClock> = None;
     let mut outcome = Outcome::Running;
+    if let Some(wait_s) = resume_wait_s {
+        // Restarted: the vehicle's state history reaches us when it next publishes.
+        let t0 = mono_now_ns();
+        while clock.is_none() && (mono_now_ns() - t0) as f64 * 1e-9 < wait_s {
+            states.drain(&mut |s| {
+                clock = Some(VehicleClock {
+                    mission_time_s: s.header.mission_time_s,
+                    sent_mono_ns: s.header.sent_mono_ns,
+                    time_scale: s.time_scale,
+                });
+            })?;
+            if clock.is_none() && waker.wait(Duration::from_millis(20))? == Wake::Shutdown {
+                return Ok(Outcome::Aborted);
+            }
+        }
+        if let Some(c) = clock {
+            epoch = (c.at(mono_now_ns()) / period).floor().max(0.0) as u64;
+            if epoch > 0 {
+                world.redraw(epoch);
+            }
+            eprintln!("sensor-sim: resumed at epoch {epoch}");
+        }
+    }
+    // The first snapshot always goes out clean: a receiver that joins late
+    // gets only the latest sample, and it must be a good one to start on.
+    publish(out, world, epoch, period, None)?;
     loop {
         states.drain(&mut |s| {
             clock = Some(VehicleClock {
@@ -233,7 +270,7 @@ fn main() -> ExitCode {
     match run(&args) {
         Ok(Outcome::Aborted) => ExitCode::from(130),
         Ok(_) => ExitCode::SUCCESS,
-        Err(e @ (Error::BadPeriod(_) | Error::BadFaults(_) | Error::NoLand)) => {
+        Err(e @ (Error::BadPeriod(_) | Error::BadResumeWait(_) | Error::BadFaults(_) | Error::NoLand)) => {
             eprintln!("sensor-sim: error: {e}");
             ExitCode::from(2)
         }

@@ -122,3 +122,24 @@ pub fn read_json(path: &Path) -> serde_json::Value {
 pub fn leftovers(prefix: &str) -> Vec<PathBuf> {
     planner::transport::ipc::leftover_files(prefix)
 }
+
+/// (tasks, weight, route) as the vehicle's journal states them, read line by
+/// line here (independently of the planner's own reader): task lines
+/// counted and their weights summed in order, the start node then every arrival.
+pub fn journal_totals(path: &Path) -> (u64, f64, Vec<u64>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()));
+    let (mut tasks, mut weight, mut route) = (0, 0.0, Vec::new());
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap_or_else(|e| panic!("{line}: {e}"));
+        match v["event"].as_str() {
+            Some("task") => {
+                tasks += 1;
+                weight += v["weight"].as_f64().expect("task weight");
+            }
+            Some("start") if route.is_empty() => route.push(v["node"].as_u64().expect("start node")),
+            Some("arrival") => route.push(v["node"].as_u64().expect("arrival node")),
+            _ => {}
+        }
+    }
+    (tasks, weight, route)
+}

@@ -23,6 +23,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
+use planner::mission::journal::{Journal, JournalEvent, JournalSummary, Resume};
 use planner::mission::world::{ScenarioArgs, load_world};
 use planner::msg::{Outcome, Plan, PlannerStatus, RejectCounters, VehicleEvent, VehicleState, WaypointSnapshot};
 use planner::transport::clock::mono_now_ns;
@@ -55,6 +56,11 @@ struct Args {
     /// Lockstep: give up when an answer takes longer than this, real s.
     #[arg(long, default_value_t = 30.0)]
     answer_timeout_s: f64,
+    /// Append-only journal of the events acted on (JSON lines, written as
+    /// they happen). When it already holds a mission that has not ended,
+    /// the vehicle resumes from it (restart after a crash).
+    #[arg(long, value_name = "FILE")]
+    journal: Option<std::path::PathBuf>,
     /// Tests: send a bad state next to each good one after the first, these
     /// kinds in turn: non_finite, node_out_of_range, out_of_order, repeated,
     /// foreign_scenario, malformed, out_of_range, or all.
@@ -72,6 +78,8 @@ enum Error {
     Transport(#[from] planner::transport::TransportError),
     #[error("{0}")]
     Usage(String),
+    #[error(transparent)]
+    Journal(#[from] planner::mission::journal::JournalError),
     #[error(
         "no answer within {0} s while waiting for {1} ({2}): are the planner and sensor-sim running with the same --ipc-prefix?"
     )]
@@ -101,6 +109,7 @@ struct Vehicle {
     ports: Ports,
     answered: Answered,
     time_scale: f64,
+    journal: Option<Journal>,
     faults: FaultCycle,
     /// Waypoints in the network (for injected out-of-range ids).
     n: usize,
@@ -113,13 +122,20 @@ impl Vehicle {
         let sim = &mut self.sim;
         self.ports.snapshots.drain(&mut |s| sim.apply_snapshot(s))?;
         let mut rejected = Vec::new();
-        self.ports.plans.drain(&mut |p| {
-            if let Err(kind) = sim.offer_plan(p) {
-                rejected.push((kind, p.header.fingerprint));
-            }
+        let mut accepted = Vec::new();
+        self.ports.plans.drain(&mut |p| match sim.offer_plan(p) {
+            Err(kind) => rejected.push((kind, p.header.fingerprint)),
+            Ok(()) => accepted.push(JournalEvent::Plan {
+                t: sim.time(),
+                seq: p.header.seq,
+                route: sim.plan().iter().map(|&b| b as usize).collect(),
+            }),
         })?;
         for (kind, fp) in rejected {
             self.ports.plans.reject_later(kind, fp);
+        }
+        for e in &accepted {
+            self.record(e)?;
         }
         let answered = &mut self.answered;
         self.ports.status.drain(&mut |st| {
@@ -130,6 +146,40 @@ impl Vehicle {
             }
         })?;
         Ok(())
+    }
+
+    /// Appends `e` to the journal, if there is one.
+    fn record(&mut self, e: &JournalEvent) -> Result<(), Error> {
+        if let Some(j) = &mut self.journal {
+            j.append(e)?;
+        }
+        Ok(())
+    }
+
+    /// Journals a simulation event (before it is published: an event is in
+    /// the journal before anyone acts on it).
+    fn record_sim(&mut self, ev: SimEvent) -> Result<(), Error> {
+        let t = self.sim.time();
+        let e = match ev {
+            SimEvent::Arrival { node } => {
+                let (task_s, task_weight) = self.sim.current_task();
+                JournalEvent::Arrival {
+                    t,
+                    node,
+                    pos: self.sim.position(),
+                    distance_m: self.sim.totals().2,
+                    task_s,
+                    task_weight,
+                }
+            }
+            SimEvent::TaskDone { node } => JournalEvent::Task {
+                t,
+                node,
+                weight: self.sim.current_task().1,
+            },
+            SimEvent::Finished(outcome) => JournalEvent::End { t, outcome },
+        };
+        self.record(&e)
     }
 
     /// Everything this vehicle rejected so far, by kind.
@@ -211,7 +261,11 @@ impl Vehicle {
         }
         loop {
             let tick = self.sim.epoch_next_update();
-            match self.sim.step_until(tick) {
+            let ev = self.sim.step_until(tick);
+            if let Some(e) = ev {
+                self.record_sim(e)?;
+            }
+            match ev {
                 Some(SimEvent::Arrival { .. }) => {
                     let seq = self.publish(VehicleEvent::Arrival, true)?;
                     if !self.wait_for(timeout_s, "the planner's answer", &|v| v.answered(session, seq))? {
@@ -239,14 +293,17 @@ impl Vehicle {
 
     fn scaled(&mut self, rate_hz: f64) -> Result<Outcome, Error> {
         let t0 = mono_now_ns();
+        // A resumed vehicle's clock goes on from its journal's last event.
+        let t_start = self.sim.time();
         let scale = self.time_scale;
         let period_ns = (1e9 / rate_hz) as u64;
         let mut next_periodic = t0;
         self.publish(VehicleEvent::Start, false)?;
         loop {
             let now = mono_now_ns();
-            let t = (now - t0) as f64 * 1e-9 * scale;
+            let t = t_start + (now - t0) as f64 * 1e-9 * scale;
             while let Some(ev) = self.sim.step_until(t) {
+                self.record_sim(ev)?;
                 match ev {
                     SimEvent::Arrival { .. } => {
                         self.publish(VehicleEvent::Arrival, false)?;
@@ -308,11 +365,23 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         plans: Guarded::new(ctx.inbox::<Plan>()?, fingerprint, "vehicle-sim"),
         status: Guarded::new(ctx.inbox::<PlannerStatus>()?, fingerprint, "vehicle-sim"),
     };
+    let earlier = match &args.journal {
+        Some(p) => JournalSummary::read(p)?,
+        None => JournalSummary::default(),
+    };
+    if let Some(o) = earlier.outcome() {
+        // Restarted after the end: nothing to do (a new mission needs a new journal).
+        eprintln!("vehicle-sim: the journal's mission already ended; nothing to resume");
+        return Ok(o);
+    }
+    let resume: Option<Resume> = earlier.resume();
+    let journal = args.journal.as_deref().map(Journal::open).transpose()?;
     let mut v = Vehicle {
         sim: VehicleSim::new(),
         ports,
         answered: Answered::default(),
         time_scale: if args.lockstep { 0.0 } else { args.time_scale },
+        journal,
         faults,
         n: rules.n(),
     };
@@ -321,6 +390,21 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     if !v.wait_for(timeout, "the first waypoint snapshot", &|v| v.sim.has_network())? {
         return Ok(Outcome::Aborted);
     }
+    if let Some(r) = &resume {
+        v.sim.resume(r);
+        eprintln!(
+            "vehicle-sim: resumed from the journal at mission time {:.1} s, waypoint {}, {} tasks",
+            r.t,
+            r.route.last().copied().unwrap_or(0),
+            r.tasks
+        );
+    }
+    let start = JournalEvent::Start {
+        t: v.sim.time(),
+        node: v.sim.route().last().unwrap_or(0),
+        resumed: resume.is_some(),
+    };
+    v.record(&start)?;
     let outcome = if args.lockstep {
         v.lockstep(timeout, stamp.session)?
     } else {
@@ -328,6 +412,10 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     };
     if outcome == Outcome::Aborted {
         v.sim.abort();
+        v.record(&JournalEvent::End {
+            t: v.sim.time(),
+            outcome,
+        })?;
         v.publish(VehicleEvent::Finished, false)?;
     }
     let (tasks, weight, distance) = v.sim.totals();

@@ -15,6 +15,7 @@
 //! at the same mission times give bit-identical trajectories, whatever the
 //! wall-clock pacing.
 
+use planner::mission::journal::Resume;
 use planner::msg::{
     Outcome, Plan, RejectKind, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids,
 };
@@ -324,6 +325,71 @@ impl VehicleSim {
         None
     }
 
+    /// Picks up where an earlier vehicle process left off (after the first
+    /// snapshot): at the last waypoint it arrived at, at the mission time of
+    /// its last journal event, with its totals, visited waypoints, the task
+    /// it had started there (redone in full) and its last plan, when that
+    /// plan still passes through here.
+    pub fn resume(&mut self, r: &Resume) {
+        let Some(&here) = r.route.last() else { return };
+        let n = (self.net.node_count as usize).min(MAX_NODES);
+        if !self.have_net || here >= n || r.route.iter().any(|&i| i >= n) {
+            return;
+        }
+        self.t = r.t;
+        self.from = here;
+        self.to = here;
+        self.pos = self.node_pos(here);
+        self.route.clear();
+        self.visited = NodeSet::EMPTY;
+        for &i in &r.route {
+            self.route.push(i);
+            self.visited.insert(i);
+        }
+        self.arrivals = r.route.len().saturating_sub(1) as u32;
+        self.tasks = r.tasks;
+        self.weight = r.weight;
+        self.distance_m = r.distance_m;
+        self.phase = match r.pending_task {
+            Some((task_s, weight)) => {
+                self.edge_task_s = task_s;
+                self.edge_weight = weight;
+                Phase::Task(task_s)
+            }
+            None => Phase::Free,
+        };
+        self.has_plan = false;
+        if let Some((seq, plan)) = &r.plan {
+            self.ever_planned = true;
+            if let Some(k) = plan.iter().position(|&i| i == here)
+                && plan.iter().all(|&i| i < n)
+            {
+                self.plan = Route::new();
+                for &i in plan {
+                    self.plan.push(i);
+                }
+                self.cursor = k;
+                self.has_plan = true;
+                self.plan_seq = *seq;
+            }
+        }
+    }
+
+    /// The task of the current edge: (duration s, weight).
+    pub fn current_task(&self) -> (f64, f64) {
+        (self.edge_task_s, self.edge_weight)
+    }
+
+    /// Position (x east, y north, z depth down), m.
+    pub fn position(&self) -> [f64; 3] {
+        self.pos
+    }
+
+    /// The plan held (empty when none).
+    pub fn plan(&self) -> &[u8] {
+        if self.has_plan { self.plan.as_bytes() } else { &[] }
+    }
+
     /// Ends the mission from outside (Ctrl-C).
     pub fn abort(&mut self) {
         if self.outcome == Outcome::Running {
@@ -523,5 +589,72 @@ mod tests {
         assert_eq!(v.step_until(1e9), Some(SimEvent::TaskDone { node: 1 }));
         assert_eq!(v.step_until(300.0), None);
         assert_eq!(v.mode(), VehicleMode::Holding);
+    }
+
+    #[test]
+    fn a_resumed_vehicle_continues_from_its_last_arrival_with_its_plan() {
+        // The original run, stopped while travelling 1 → 2.
+        let mut a = VehicleSim::new();
+        a.apply_snapshot(&net());
+        a.offer_plan(&plan(&[0, 1, 2, 3], 1)).unwrap();
+        assert_eq!(a.step_until(1e9), Some(SimEvent::Arrival { node: 1 }));
+        let (task_s, task_w) = a.current_task();
+        assert_eq!(a.step_until(1e9), Some(SimEvent::TaskDone { node: 1 }));
+        assert_eq!(a.step_until(150.0), None);
+        // What the journal would say: arrived at 1 at 100 s, task done at 110 s.
+        let r = Resume {
+            t: 110.0,
+            route: vec![0, 1],
+            tasks: 1,
+            weight: task_w,
+            distance_m: 100.0,
+            pending_task: None,
+            plan: Some((1, vec![0, 1, 2, 3])),
+        };
+        let mut b = VehicleSim::new();
+        b.apply_snapshot(&net());
+        b.resume(&r);
+        assert_eq!(b.time(), 110.0);
+        assert_eq!(b.position(), [100.0, 0.0, 0.0]);
+        assert_eq!(b.plan(), &[0, 1, 2, 3]);
+        let ev = run_to_end(&mut b);
+        assert_eq!(ev.last(), Some(&(330.0, SimEvent::Finished(Outcome::GoalReached))));
+        assert_eq!(b.route().to_vec(), vec![0, 1, 2, 3]);
+        assert_eq!(b.totals().0, 3);
+        // Stopped during the task at 1: the task is redone, then the plan goes on.
+        let mut c = VehicleSim::new();
+        c.apply_snapshot(&net());
+        c.resume(&Resume {
+            t: 100.0,
+            tasks: 0,
+            weight: 0.0,
+            pending_task: Some((task_s, task_w)),
+            ..r
+        });
+        assert_eq!(c.mode(), VehicleMode::Working);
+        assert_eq!(c.step_until(1e9), Some(SimEvent::TaskDone { node: 1 }));
+        assert_eq!(c.time(), 100.0 + task_s);
+        assert_eq!(c.totals().1, task_w);
+        assert_eq!(c.step_until(1e9), Some(SimEvent::Arrival { node: 2 }));
+        // Without a plan through here it holds (and may take a new one).
+        let mut d = VehicleSim::new();
+        d.apply_snapshot(&net());
+        d.resume(&Resume {
+            t: 110.0,
+            route: vec![0, 1],
+            tasks: 1,
+            weight: task_w,
+            distance_m: 100.0,
+            pending_task: None,
+            plan: Some((1, vec![0, 3])),
+        });
+        assert_eq!(d.step_until(200.0), None);
+        assert_eq!(d.mode(), VehicleMode::Holding);
+        d.offer_plan(&plan(&[1, 2, 3], 2)).unwrap();
+        assert_eq!(
+            d.offer_plan(&plan(&[1, 0, 3], 3)),
+            Err(RejectKind::VisitedNode),
+            "0 visited"
+        );
     }
 }

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use super::bench::{BenchArgs, EchoArgs, run_bench, run_echo};
 use super::run::{MissionArgs, run_mission};
+use super::soak::{SoakArgs, run_soak};
 use crate::service::cli::{ServeArgs, run_serve};
 
 /// The three-process system's subcommands.
@@ -14,6 +15,9 @@ pub enum IpcCommand {
     /// Run a whole mission: sensor-sim and vehicle-sim as child processes,
     /// the re-planning service here; writes report.json, mission.log, mission.svg.
     Mission(MissionArgs),
+    /// Run N missions back to back (with random faults) and report on
+    /// survival, leaks and memory: DIR/soak.json.
+    Soak(SoakArgs),
     /// Run the re-planning service as a process of its own.
     Serve(ServeArgs),
     /// Measure trigger → plan latency across processes next to a raw iceoryx2 ping-pong.
@@ -28,6 +32,7 @@ pub fn run(cmd: &IpcCommand) -> ExitCode {
     match cmd {
         IpcCommand::Mission(a) => run_mission(a),
         IpcCommand::Serve(a) => run_serve(a),
+        IpcCommand::Soak(a) => run_soak(a),
         IpcCommand::BenchLatency(a) => run_bench(a),
         IpcCommand::BenchEcho(a) => run_echo(a),
     }

@@ -102,6 +102,67 @@ pub fn lines(e: &ServiceEvent) -> Vec<Value> {
     }
 }
 
+/// Events a log writer queues before the service waits for room.
+const LOG_QUEUE_LEN: usize = 1024;
+
+/// Runs `body` with an event sink that appends each event's lines to
+/// `path` (created if missing) from a writer thread of its own, so the
+/// calling (service) thread neither formats nor allocates: it only moves
+/// the event into a fixed-size lock-free queue. The lines are flushed after
+/// every batch. Without a path the sink discards events.
+pub fn with_log_writer<R>(
+    path: Option<&std::path::Path>,
+    body: impl FnOnce(&mut dyn FnMut(&ServiceEvent)) -> R,
+) -> std::io::Result<R> {
+    use std::io::Write;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let Some(path) = path else {
+        return Ok(body(&mut |_| {}));
+    };
+    let file = std::fs::OpenOptions::new().create(true).append(true).open(path)?;
+    let mut queue: Box<heapless::spsc::Queue<ServiceEvent, LOG_QUEUE_LEN>> = Box::new(heapless::spsc::Queue::new());
+    let (mut producer, mut consumer) = queue.split();
+    let done = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let done = &done;
+        let writer = scope.spawn(move || -> std::io::Result<()> {
+            let mut out = std::io::BufWriter::new(file);
+            loop {
+                let finished = done.load(Ordering::Acquire);
+                let mut wrote = false;
+                while let Some(e) = consumer.dequeue() {
+                    for line in lines(&e) {
+                        writeln!(out, "{line}")?;
+                    }
+                    wrote = true;
+                }
+                if wrote {
+                    out.flush()?;
+                }
+                if finished {
+                    return out.flush();
+                }
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
+        });
+        let r = body(&mut |e: &ServiceEvent| {
+            // Never drop an event: wait for room.
+            while producer.enqueue(*e).is_err() {
+                if writer.is_finished() {
+                    return;
+                }
+                std::thread::yield_now();
+            }
+        });
+        done.store(true, Ordering::Release);
+        match writer.join() {
+            Ok(Ok(())) => Ok(r),
+            Ok(Err(e)) => Err(e),
+            Err(_) => Err(std::io::Error::other("the log writer panicked")),
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -133,5 +194,29 @@ mod tests {
         assert_eq!(l[1]["route"], json!([4, 7, 9]));
         assert_eq!(l[1]["time_s"], 900.25);
         assert_eq!(l[1].to_string(), lines(&e)[1].to_string(), "formatting is stable");
+    }
+
+    #[test]
+    fn the_log_writer_appends_every_event_in_order() {
+        let p = std::env::temp_dir().join(format!("log-writer-{}.log", std::process::id()));
+        let _ = std::fs::remove_file(&p);
+        for round in 0..2 {
+            with_log_writer(Some(&p), |sink| {
+                for k in 0..2000 {
+                    sink(&ServiceEvent::Finished {
+                        t: f64::from(k + round * 2000),
+                        outcome: Outcome::GoalReached,
+                    });
+                }
+            })
+            .unwrap();
+        }
+        let text = std::fs::read_to_string(&p).unwrap();
+        let ts: Vec<f64> = text
+            .lines()
+            .map(|l| serde_json::from_str::<Value>(l).unwrap()["t"].as_f64().unwrap())
+            .collect();
+        assert_eq!(ts, (0..4000).map(f64::from).collect::<Vec<_>>());
+        let _ = std::fs::remove_file(&p);
     }
 }

@@ -63,6 +63,20 @@ pub struct Report {
     pub wall_time_s: f64,
     /// Shared-memory and iceoryx2 files of the run left after it.
     pub shm_files_left: usize,
+    /// Whether the planner ran as a child process.
+    pub planner_process: bool,
+    /// Faults injected and what came of them (`--faults`).
+    pub faults: Option<super::supervise::FaultReport>,
+    /// Times the vehicle resumed from its journal.
+    pub vehicle_restarts: u64,
+    /// Solver iterations per plan asked for.
+    pub iterations_budget: u32,
+    /// What the deadline cuts cost, when measured.
+    pub cut: Option<crate::service::core::CutCounters>,
+    /// Peak resident set size of the child processes (planner, sensor-sim,
+    /// vehicle-sim), kB; 0 where not measured (the planner on a thread, or
+    /// lockstep without --planner-process).
+    pub rss_kb: [u64; 3],
     /// SCHED_FIFO priority of the planner's service thread (None: normal
     /// scheduling).
     pub rt_priority: Option<i32>,
@@ -105,7 +119,9 @@ impl Report {
             "solver_iterations": {
                 "total": self.iterations_total,
                 "mean_per_plan": self.iterations_total as f64 / self.plans.max(1) as f64,
+                "budget_per_plan": self.iterations_budget,
             },
+            "anytime": self.anytime_json(),
             "steady_state_allocations": self.alloc.sys_allocs_steady,
             "allocations": {
                 "allocator_installed": self.allocator_installed,
@@ -136,6 +152,36 @@ impl Report {
             "time_scale": if self.lockstep { Value::Null } else { json!(self.time_scale) },
             "wall_time_s": self.wall_time_s,
             "shm_files_left": self.shm_files_left,
+            "planner_process": self.planner_process,
+            "vehicle_restarts": self.vehicle_restarts,
+            "rss_kb_peak": {
+                "planner": self.rss_kb[0],
+                "sensor-sim": self.rss_kb[1],
+                "vehicle-sim": self.rss_kb[2],
+            },
+            "faults": self.faults.as_ref().map(|f| f.to_json(matches!(self.outcome, Outcome::GoalReached | Outcome::TimedOut))),
+        })
+    }
+
+    /// The cost of the deadline cuts: how many plans were cut, the
+    /// iterations they ran against the budget, and their weight against
+    /// the warm start they improved on.
+    fn anytime_json(&self) -> Value {
+        let Some(c) = self.cut else {
+            return json!({"plans_cut": self.deadline_cuts, "measured": false});
+        };
+        let cuts = self.deadline_cuts.max(1) as f64;
+        let warm = c.with_warm_start.max(1) as f64;
+        json!({
+            "measured": true,
+            "plans_cut": self.deadline_cuts,
+            "plans_cut_share": self.deadline_cuts as f64 / self.plans.max(1) as f64,
+            "iterations_budget": self.iterations_budget,
+            "mean_iterations_cut": c.iterations as f64 / cuts,
+            "iterations_run_share_cut": c.iterations as f64 / cuts / f64::from(self.iterations_budget.max(1)),
+            "cut_with_warm_start": c.with_warm_start,
+            "mean_weight_cut": c.weight / warm,
+            "mean_weight_warm_start": c.warm_start_weight / warm,
         })
     }
 

@@ -23,10 +23,14 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use heapless::spsc::Queue;
 
+use super::journal::{JournalEvent, JournalSummary};
 use super::log::lines;
 use super::report::Report;
+use super::supervise::{
+    FaultKind, FaultReport, LATEST_INJECTION, LivenessEvent, Monitor, PlannerTotals, Proc, plan_faults,
+};
 use super::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
-use crate::msg::{FromCode, Outcome, RejectCounters, VehicleState};
+use crate::msg::{Outcome, RejectCounters, VehicleState};
 use crate::plot::{BoundMarker, MapFigure, PlotError, RouteLayer, map_figure};
 use crate::service::alloc;
 use crate::service::cli::{ServeError, ServiceArgs, make_solver, open_ports, prepare_service_thread};
@@ -71,6 +75,23 @@ pub struct MissionArgs {
     /// Give up when a peer stays silent this long, real s.
     #[arg(long, default_value_t = 60.0)]
     pub answer_timeout_s: f64,
+    /// Run the planner as a child process (`planner serve`) supervised like
+    /// the simulators, instead of on a thread of this process: any of the
+    /// three can then be killed and restarted.
+    #[arg(long)]
+    pub planner_process: bool,
+    /// Inject this many faults at random mission times (SIGKILL + restart or
+    /// SIGSTOP/SIGCONT of a random process; scaled time; implies
+    /// --planner-process). Drawn from --fault-seed.
+    #[arg(long, default_value_t = 0, conflicts_with = "lockstep")]
+    pub faults: usize,
+    /// Seed of the fault draws (default: the scenario seed).
+    #[arg(long)]
+    pub fault_seed: Option<u64>,
+    /// A process silent for longer than this is reported as stalled, real
+    /// ms (the sensor gets at least three of its periods; scaled time only).
+    #[arg(long, default_value_t = 1000.0)]
+    pub stall_timeout_ms: f64,
     /// Tests: passed to sensor-sim as `--inject` (bad snapshots next to good ones).
     #[arg(long, value_name = "KIND[,KIND…]")]
     pub inject_sensor: Option<String>,
@@ -191,26 +212,62 @@ struct Kid {
     child: Option<Child>,
     log: PathBuf,
     status: Option<ExitStatus>,
+    bin: PathBuf,
+    args: Vec<String>,
 }
 
 impl Kid {
     fn spawn(name: &'static str, args: &[String], out: &Path) -> Result<Self, MissionError> {
-        let bin = sibling_binary(name)?;
+        Self::spawn_bin(name, name, args, out)
+    }
+
+    /// `bin_name` started as `name` (the planner runs as `planner serve`).
+    fn spawn_bin(name: &'static str, bin_name: &str, args: &[String], out: &Path) -> Result<Self, MissionError> {
+        let bin = if bin_name == "planner" {
+            std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?
+        } else {
+            sibling_binary(bin_name)?
+        };
         let log = out.join(format!("{name}.log"));
-        let err = File::create(&log).map_err(|e| io_err(&log, e))?;
-        let child = Command::new(&bin)
-            .args(args)
+        File::create(&log).map_err(|e| io_err(&log, e))?;
+        let mut k = Self {
+            name,
+            child: None,
+            log,
+            status: None,
+            bin,
+            args: args.to_vec(),
+        };
+        k.start(&[])?;
+        Ok(k)
+    }
+
+    /// Starts the process (again), with `extra` flags; stderr appends to its log.
+    fn start(&mut self, extra: &[String]) -> Result<(), MissionError> {
+        let err = File::options()
+            .append(true)
+            .open(&self.log)
+            .map_err(|e| io_err(&self.log, e))?;
+        let child = Command::new(&self.bin)
+            .args(&self.args)
+            .args(extra)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(err)
             .spawn()
-            .map_err(|e| MissionError::Child(format!("cannot start {}: {e}", bin.display())))?;
-        Ok(Self {
-            name,
-            child: Some(child),
-            log,
-            status: None,
-        })
+            .map_err(|e| MissionError::Child(format!("cannot start {}: {e}", self.bin.display())))?;
+        self.child = Some(child);
+        self.status = None;
+        Ok(())
+    }
+
+    /// SIGKILL and reap (a crash, as far as everyone else can tell).
+    fn kill_now(&mut self) {
+        if let Some(c) = &mut self.child {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+        self.child = None;
     }
 
     /// Whether it has exited (reaps it).
@@ -225,6 +282,11 @@ impl Kid {
             self.child = None;
         }
         self.status.is_some()
+    }
+
+    /// Resident set size now, kB (`None`: not running).
+    fn rss_kb(&self) -> Option<u64> {
+        rss_kb_of(self.child.as_ref()?.id())
     }
 
     fn signal(&self, sig: i32) {
@@ -273,6 +335,14 @@ impl Drop for Kid {
             self.finish(Duration::ZERO);
         }
     }
+}
+
+/// Resident set size of process `pid`, kB (`VmRSS` in `/proc/<pid>/status`).
+pub fn rss_kb_of(pid: u32) -> Option<u64> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    text.lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
 }
 
 fn fresh_out_dir(seed: u64) -> PathBuf {
@@ -368,76 +438,52 @@ fn plot(path: &Path, world: &mut MissionWorld, trace: &Trace, title: &str) -> Re
     Ok(())
 }
 
-fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
-    let scale_ok = a.time_scale.is_finite() && a.time_scale > 0.0;
-    if !a.lockstep && !scale_ok {
-        return Err(MissionError::Usage(format!(
-            "--time-scale {}: must be > 0",
-            a.time_scale
-        )));
-    }
-    if !(a.answer_timeout_s.is_finite() && a.answer_timeout_s > 0.0) {
-        return Err(MissionError::Usage(format!(
-            "--answer-timeout-s {}: must be > 0",
-            a.answer_timeout_s
-        )));
-    }
-    let wall = Instant::now();
-    let mut world = load_world(&a.scenario)?;
-    let fingerprint = world.fingerprint();
-    let cfg = a
-        .service
-        .config(&world, a.lockstep && !a.enforce_deadline)
-        .map_err(|e| match e {
-            ServeError::Usage(u) => MissionError::Usage(u),
-            other => MissionError::Serve(other),
-        })?;
-    let usage = |e: crate::wire::FaultListError| MissionError::Usage(e.to_string());
-    let sensor_faults =
-        FaultCycle::parse_opt("--inject-sensor", a.inject_sensor.as_deref(), &SENSOR_FAULTS).map_err(usage)?;
-    let vehicle_faults =
-        FaultCycle::parse_opt("--inject-vehicle", a.inject_vehicle.as_deref(), &VEHICLE_FAULTS).map_err(usage)?;
-    let plan_faults = a
-        .service
-        .plan_faults()
-        .map_err(|e| MissionError::Usage(e.to_string()))?;
-    let rules = Arc::new(WireRules::new(&world));
-    let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
-    let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
-    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
-    std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
-    signal::install();
-    cleanup_dead_nodes(&domain_config(&prefix)?);
+/// What a run of the three processes produced, whichever way the planner ran.
+struct RunOut {
+    totals: PlannerTotals,
+    allocator_installed: bool,
+    last_state: Option<VehicleState>,
+    /// The vehicle reported the end of the mission to the planner.
+    finished: bool,
+    trace: Trace,
+    faults: Option<FaultReport>,
+    /// Peak resident set size of each child (planner, sensor, vehicle), kB
+    /// (0: not measured).
+    rss_kb: [u64; 3],
+    /// SCHED_FIFO priority of the service thread (None: normal scheduling,
+    /// or not known: the planner as a child process).
+    rt_priority: Option<i32>,
+}
 
-    let mut common = vec![
-        "--ipc-prefix".to_string(),
-        prefix.clone(),
-        "--vehicle".into(),
-        a.vehicle.clone(),
-    ];
-    common.extend(a.scenario.to_flags());
-    let mut vehicle_args = common.clone();
-    let mut sensor_args = common.clone();
-    if !sensor_faults.is_empty() {
-        sensor_args.extend(["--inject".into(), sensor_faults.to_flag_value()]);
-    }
-    if !vehicle_faults.is_empty() {
-        vehicle_args.extend(["--inject".into(), vehicle_faults.to_flag_value()]);
-    }
-    if a.lockstep {
-        vehicle_args.push("--lockstep".into());
-    } else {
-        vehicle_args.extend(["--time-scale".into(), a.time_scale.to_string()]);
-    }
-    vehicle_args.extend(["--answer-timeout-s".into(), a.answer_timeout_s.to_string()]);
+/// How to start the simulators, where to write, and the mission's budget.
+struct Launch<'a> {
+    out: &'a Path,
+    /// Flags every process gets.
+    common: &'a [String],
+    sensor_args: &'a [String],
+    vehicle_args: &'a [String],
+    /// Mission time budget, s.
+    budget: f64,
+}
+
+/// Runs the mission with the service on a thread of this process.
+fn threaded(
+    a: &MissionArgs,
+    opts: IpcOptions,
+    fingerprint: u64,
+    cfg: ServiceConfig,
+    l: &Launch,
+    rules: Arc<WireRules>,
+    plan_faults: FaultCycle,
+) -> Result<RunOut, MissionError> {
+    let (out, vehicle_args, budget) = (l.out.to_path_buf(), l.vehicle_args, l.budget);
     let mut kids = [
-        Kid::spawn("sensor-sim", &sensor_args, &out)?,
-        Kid::spawn("vehicle-sim", &vehicle_args, &out)?,
+        Kid::spawn("sensor-sim", l.sensor_args, &out)?,
+        Kid::spawn("vehicle-sim", vehicle_args, &out)?,
     ];
 
     let log_path = out.join("mission.log");
     let mut log = BufWriter::new(File::create(&log_path).map_err(|e| io_err(&log_path, e))?);
-    let budget = world.snapshot().time_available_s;
     let bar = if a.quiet {
         indicatif::ProgressBar::hidden()
     } else {
@@ -461,9 +507,9 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let mut child_error = None;
 
     let rt_priority = a.service.rt_priority;
+    let opts = &opts;
     let result = std::thread::scope(|scope| {
         let shared = &shared;
-        let opts = &opts;
         let rules = &rules;
         let handle = scope.spawn(move || {
             let mut events = |e: &ServiceEvent| {
@@ -539,11 +585,6 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     if let Err(e) = log.flush() {
         log_error.get_or_insert_with(|| io_err(&log_path, e));
     }
-    let retired = retire_domain(&prefix)?;
-    let left = leftover_files(&prefix);
-    if !retired {
-        eprintln!("planner: iceoryx2 domain {prefix} still has live nodes; not removed");
-    }
     let service = match result {
         Ok(r) => r?,
         Err(_) => return Err(MissionError::Child("the service thread panicked".into())),
@@ -554,46 +595,496 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     if let Some(e) = child_error.or_else(|| kids.iter().find_map(|k| k.failed())) {
         return Err(MissionError::Child(e));
     }
-    let last = service.last_state;
-    let outcome = match (service.exit, last) {
-        (ExitReason::Finished, Some(s)) => Outcome::from_code(s.outcome).unwrap_or(Outcome::Running),
+    let c = service.counters;
+    Ok(RunOut {
+        totals: PlannerTotals {
+            plans: c.plans,
+            sensor_updates: c.sensor_updates,
+            deadline_misses: c.deadline_misses,
+            deadline_cuts: c.deadline_cuts,
+            fallbacks: c.fallbacks,
+            iterations_total: c.iterations_total,
+            max_latency_us: service.latency_us.2,
+            latency_us: service.latency_us,
+            rejected: service.rejected,
+            alloc: alloc::counters(),
+            cut: Some(c.cut),
+        },
+        allocator_installed: alloc::installed(),
+        last_state: service.last_state,
+        finished: service.exit == ExitReason::Finished,
+        trace,
+        faults: None,
+        rss_kb: [0; 3],
+        rt_priority: service.rt_priority,
+    })
+}
+
+/// The fault being handled now.
+#[derive(Clone, Copy, Debug)]
+enum Active {
+    /// A killed process was restarted: cleared when it is heard from again.
+    Restarting {
+        p: Proc,
+        key_idx: usize,
+        since: Instant,
+        attempts: u32,
+    },
+    /// A process is stopped until `until`.
+    Paused {
+        p: Proc,
+        key_idx: usize,
+        since: Instant,
+        until: Instant,
+        detected: bool,
+    },
+    /// A paused process was continued: cleared when it is heard from again.
+    Continued { p: Proc, key_idx: usize, detected: bool },
+}
+
+/// Longest wait for a restarted or continued process to be heard from
+/// again before the fault counts as not cleared, real s.
+const CLEAR_LIMIT: Duration = Duration::from_secs(30);
+
+/// Starts of a killed process before giving up: a start can fail on a race
+/// with the dead node's cleanup (iceoryx2 #1578; notes §5 say retry).
+const RESTART_ATTEMPTS: u32 = 3;
+
+/// Extra flags of a restarted process: a sensor starts from the vehicle's
+/// mission time, not from epoch 0 (the vehicle resumes from its journal,
+/// the planner from the topics' history, with their usual flags).
+fn restart_flags(p: Proc) -> Vec<String> {
+    if p == Proc::Sensor {
+        vec!["--resume-wait-s".into(), "5".into()]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Runs the mission with all three as supervised child processes, injecting
+/// the faults `--faults` asks for.
+fn supervised(
+    a: &MissionArgs,
+    opts: &IpcOptions,
+    l: &Launch,
+    sensor_period_s: f64,
+    fingerprint: u64,
+) -> Result<RunOut, MissionError> {
+    let (out, common, vehicle_args, budget) = (l.out, l.common, l.vehicle_args, l.budget);
+    let stall = Duration::from_secs_f64(a.stall_timeout_ms / 1000.0);
+    let sensor_stall = if a.lockstep {
+        stall
+    } else {
+        stall.max(Duration::from_secs_f64(3.0 * sensor_period_s / a.time_scale))
+    };
+    let timeouts = [stall, sensor_stall, stall];
+    // The monitor subscribes before anyone publishes: it sees every status.
+    let mut monitor = Monitor::new(opts, timeouts, fingerprint)?;
+    let mut planner_args = vec!["serve".to_string()];
+    planner_args.extend(common.iter().cloned());
+    planner_args.extend(a.service.to_flags());
+    if a.lockstep && !a.enforce_deadline {
+        planner_args.push("--lockstep".into());
+    }
+    let log_path = out.join("mission.log");
+    File::create(&log_path).map_err(|e| io_err(&log_path, e))?;
+    planner_args.extend(["--log".into(), log_path.display().to_string()]);
+    let mut kids = [
+        Kid::spawn_bin("planner", "planner", &planner_args, out)?,
+        Kid::spawn("sensor-sim", l.sensor_args, out)?,
+        Kid::spawn("vehicle-sim", vehicle_args, out)?,
+    ];
+    let fault_seed = a.fault_seed.unwrap_or(a.scenario.seed);
+    let faults = plan_faults(fault_seed, a.faults, budget, &Proc::ALL);
+    let mut report = FaultReport {
+        planned: faults.clone(),
+        timeouts_ms: timeouts.map(|t| t.as_secs_f64() * 1000.0),
+        ..FaultReport::default()
+    };
+    let keys: Vec<String> = faults.iter().map(|f| f.key()).collect();
+    let faults_path = out.join("faults.log");
+    let mut flog = BufWriter::new(File::create(&faults_path).map_err(|e| io_err(&faults_path, e))?);
+    let wall0 = Instant::now();
+    let note = |flog: &mut BufWriter<File>, t: f64, v: serde_json::Value| {
+        let mut v = v;
+        v["t"] = serde_json::json!(t);
+        v["wall_s"] = serde_json::json!(wall0.elapsed().as_secs_f64());
+        let _ = writeln!(flog, "{v}");
+        let _ = flog.flush();
+    };
+    let bar = if a.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(budget as u64)
+    };
+    let mut next = 0;
+    let mut active: Option<Active> = None;
+    let mut events = Vec::new();
+    let mut forwarded = false;
+    let mut failed_since: Option<Instant> = None;
+    let mut child_error = None;
+    let mut rss_kb = [0u64; 3];
+    let mut rss_at = Instant::now();
+    loop {
+        if rss_at.elapsed() >= Duration::from_millis(100) {
+            rss_at = Instant::now();
+            for (peak, k) in rss_kb.iter_mut().zip(&kids) {
+                *peak = (*peak).max(k.rss_kb().unwrap_or(0));
+            }
+        }
+        let vehicle_done = kids[Proc::Vehicle as usize].poll()
+            || monitor
+                .last_state()
+                .is_some_and(|s| s.outcome != Outcome::Running as u32);
+        let mut watch = [false; 3];
+        for p in Proc::ALL {
+            let restarting = matches!(active, Some(Active::Restarting { p: q, .. }) if q == p);
+            watch[p as usize] = !a.lockstep && !vehicle_done && !restarting && !kids[p as usize].poll();
+        }
+        events.clear();
+        monitor.poll(watch, &mut events);
+        let t = monitor.last_state().map_or(0.0, |s| s.header.mission_time_s);
+        bar.set_position(t.clamp(0.0, budget) as u64);
+        for e in &events {
+            match *e {
+                LivenessEvent::Stalled { proc, silent } => {
+                    *report.stalls.entry(proc.name().to_string()).or_default() += 1;
+                    if let Some(Active::Paused { p, since, detected, .. }) = &mut active
+                        && *p == proc
+                        && !*detected
+                    {
+                        *detected = true;
+                        report.detect_ms_max = report.detect_ms_max.max(since.elapsed().as_secs_f64() * 1000.0);
+                    }
+                    eprintln!("planner: {} silent for {} ms: stalled", proc.name(), silent.as_millis());
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "stall_detected", "process": proc.name(), "silent_ms": silent.as_millis() as u64}),
+                    );
+                }
+                LivenessEvent::Recovered { proc, silent } => note(
+                    &mut flog,
+                    t,
+                    serde_json::json!({"event": "recovered", "process": proc.name(), "silent_ms": silent.as_millis() as u64}),
+                ),
+            }
+        }
+        // The fault in hand, then the next one.
+        match active {
+            Some(Active::Restarting {
+                p,
+                key_idx,
+                since,
+                attempts,
+            }) => {
+                if monitor.heard(p) {
+                    *report.cleared.entry(keys[key_idx].clone()).or_default() += 1;
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "cleared", "fault": keys[key_idx]}),
+                    );
+                    active = None;
+                } else if since.elapsed() > CLEAR_LIMIT || vehicle_done {
+                    active = None;
+                } else if attempts < RESTART_ATTEMPTS && kids[p as usize].poll() && kids[p as usize].failed().is_some()
+                {
+                    let why = kids[p as usize].failed().unwrap_or_default();
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "restart_failed", "process": p.name(), "why": why}),
+                    );
+                    kids[p as usize].start(&restart_flags(p))?;
+                    active = Some(Active::Restarting {
+                        p,
+                        key_idx,
+                        since,
+                        attempts: attempts + 1,
+                    });
+                }
+            }
+            Some(Active::Paused {
+                p,
+                key_idx,
+                until,
+                detected,
+                ..
+            }) => {
+                if Instant::now() >= until || vehicle_done && p != Proc::Vehicle {
+                    kids[p as usize].signal(libc::SIGCONT);
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "continued", "process": p.name()}),
+                    );
+                    active = Some(Active::Continued { p, key_idx, detected });
+                }
+            }
+            Some(Active::Continued { p, key_idx, detected }) => {
+                if !monitor.stalled(p) || vehicle_done {
+                    if detected {
+                        *report.cleared.entry(keys[key_idx].clone()).or_default() += 1;
+                        note(
+                            &mut flog,
+                            t,
+                            serde_json::json!({"event": "cleared", "fault": keys[key_idx]}),
+                        );
+                    }
+                    active = None;
+                }
+            }
+            None => {
+                if next < faults.len() && t >= faults[next].at_s && t > LATEST_INJECTION * budget {
+                    report.skipped_late += 1;
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "skipped_late", "fault": keys[next]}),
+                    );
+                    next += 1;
+                } else if next < faults.len() && !vehicle_done && !forwarded && t >= faults[next].at_s {
+                    let f = faults[next];
+                    let p = f.target;
+                    *report.injected.entry(keys[next].clone()).or_default() += 1;
+                    note(
+                        &mut flog,
+                        t,
+                        serde_json::json!({"event": "inject", "fault": keys[next], "planned_t": f.at_s}),
+                    );
+                    let now = Instant::now();
+                    match f.kind {
+                        FaultKind::Kill => {
+                            kids[p as usize].kill_now();
+                            monitor.forget(p);
+                            kids[p as usize].start(&restart_flags(p))?;
+                            *report.restarts.entry(p.name().to_string()).or_default() += 1;
+                            active = Some(Active::Restarting {
+                                p,
+                                key_idx: next,
+                                since: now,
+                                attempts: 1,
+                            });
+                        }
+                        FaultKind::Pause => {
+                            kids[p as usize].signal(libc::SIGSTOP);
+                            active = Some(Active::Paused {
+                                p,
+                                key_idx: next,
+                                since: now,
+                                until: now + timeouts[p as usize] + Duration::from_millis(500),
+                                detected: false,
+                            });
+                        }
+                    }
+                    next += 1;
+                }
+            }
+        }
+        if signal::shutdown_requested() && !forwarded {
+            forwarded = true;
+            for k in &kids {
+                k.signal(libc::SIGCONT);
+                k.signal(signal::received_signal());
+            }
+        }
+        if kids[Proc::Vehicle as usize].poll() {
+            break;
+        }
+        // A child that failed on its own (not one we killed, nor one being
+        // restarted) ends the run after a grace period.
+        let restarting = match active {
+            Some(Active::Restarting { p, .. }) => Some(p as usize),
+            _ => None,
+        };
+        if kids
+            .iter_mut()
+            .enumerate()
+            .any(|(i, k)| Some(i) != restarting && k.poll() && k.failed().is_some())
+        {
+            let since = *failed_since.get_or_insert_with(Instant::now);
+            if since.elapsed() > Duration::from_secs(2) {
+                child_error = kids.iter().find_map(|k| k.failed());
+                break;
+            }
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    bar.finish_and_clear();
+    for k in &kids {
+        k.signal(libc::SIGCONT);
+    }
+    // The planner and the sensor end when they see the vehicle's last state.
+    for k in &mut kids {
+        k.finish(Duration::from_secs(10));
+    }
+    events.clear();
+    monitor.poll([false; 3], &mut events);
+    let _ = flog.flush();
+    if let Some(e) = child_error.or_else(|| kids.iter().find_map(|k| k.failed())) {
+        return Err(MissionError::Child(e));
+    }
+    let totals = monitor.planner_totals();
+    let last_state = monitor.last_state().copied();
+    let mut trace = Trace {
+        last_epoch: monitor.last_epoch(),
+        ..Trace::default()
+    };
+    drop(monitor);
+    // The plot's trace comes from the journal (the planner's events are in
+    // its own process).
+    let journal = JournalSummary::read(&out.join("journal.jsonl")).map_err(|e| MissionError::Child(e.to_string()))?;
+    for e in &journal.events {
+        match e {
+            JournalEvent::Arrival { pos, .. } => trace.arrivals.push((pos[0], pos[1])),
+            JournalEvent::Plan { route, .. } => {
+                if trace.first_plan.is_empty() {
+                    trace.first_plan = route.clone();
+                }
+                trace.last_plan = route.clone();
+            }
+            _ => {}
+        }
+    }
+    Ok(RunOut {
+        totals,
+        allocator_installed: true,
+        finished: journal.outcome().is_some_and(|o| o != Outcome::Aborted),
+        last_state,
+        trace,
+        faults: Some(report),
+        rss_kb,
+        rt_priority: None,
+    })
+}
+
+/// Runs one mission; returns its report and output folder.
+pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
+    let scale_ok = a.time_scale.is_finite() && a.time_scale > 0.0;
+    if !a.lockstep && !scale_ok {
+        return Err(MissionError::Usage(format!(
+            "--time-scale {}: must be > 0",
+            a.time_scale
+        )));
+    }
+    if !(a.answer_timeout_s.is_finite() && a.answer_timeout_s > 0.0) {
+        return Err(MissionError::Usage(format!(
+            "--answer-timeout-s {}: must be > 0",
+            a.answer_timeout_s
+        )));
+    }
+    if !(a.stall_timeout_ms.is_finite() && a.stall_timeout_ms >= 10.0) {
+        return Err(MissionError::Usage(format!(
+            "--stall-timeout-ms {}: must be >= 10",
+            a.stall_timeout_ms
+        )));
+    }
+    let wall = Instant::now();
+    let mut world = load_world(&a.scenario)?;
+    let fingerprint = world.fingerprint();
+    let cfg = a
+        .service
+        .config(&world, a.lockstep && !a.enforce_deadline)
+        .map_err(|e| match e {
+            ServeError::Usage(u) => MissionError::Usage(u),
+            other => MissionError::Serve(other),
+        })?;
+    let usage = |e: crate::wire::FaultListError| MissionError::Usage(e.to_string());
+    let sensor_faults =
+        FaultCycle::parse_opt("--inject-sensor", a.inject_sensor.as_deref(), &SENSOR_FAULTS).map_err(usage)?;
+    let vehicle_faults =
+        FaultCycle::parse_opt("--inject-vehicle", a.inject_vehicle.as_deref(), &VEHICLE_FAULTS).map_err(usage)?;
+    let plan_faults = a
+        .service
+        .plan_faults()
+        .map_err(|e| MissionError::Usage(e.to_string()))?;
+    let rules = Arc::new(WireRules::new(&world));
+    let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
+    let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
+    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
+    std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
+    signal::install();
+    cleanup_dead_nodes(&domain_config(&prefix)?);
+
+    let mut common = vec![
+        "--ipc-prefix".to_string(),
+        prefix.clone(),
+        "--vehicle".into(),
+        a.vehicle.clone(),
+    ];
+    common.extend(a.scenario.to_flags());
+    let mut vehicle_args = common.clone();
+    let mut sensor_args = common.clone();
+    if !sensor_faults.is_empty() {
+        sensor_args.extend(["--inject".into(), sensor_faults.to_flag_value()]);
+    }
+    if !vehicle_faults.is_empty() {
+        vehicle_args.extend(["--inject".into(), vehicle_faults.to_flag_value()]);
+    }
+    if a.lockstep {
+        vehicle_args.push("--lockstep".into());
+    } else {
+        vehicle_args.extend(["--time-scale".into(), a.time_scale.to_string()]);
+    }
+    vehicle_args.extend(["--answer-timeout-s".into(), a.answer_timeout_s.to_string()]);
+    // The vehicle's journal is the record of what happened; a fresh run
+    // starts a fresh one (an old one would be resumed).
+    let journal_path = out.join("journal.jsonl");
+    match std::fs::remove_file(&journal_path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&journal_path, e)),
+        _ => {}
+    }
+    vehicle_args.extend(["--journal".into(), journal_path.display().to_string()]);
+    let budget = world.snapshot().time_available_s;
+    let launch = Launch {
+        out: &out,
+        common: &common,
+        sensor_args: &sensor_args,
+        vehicle_args: &vehicle_args,
+        budget,
+    };
+    let run = if a.planner_process || a.faults > 0 {
+        supervised(a, &opts, &launch, world.sensor_period_s(), fingerprint)
+    } else {
+        threaded(a, opts, fingerprint, cfg, &launch, rules, plan_faults)
+    };
+    let retired = retire_domain(&prefix)?;
+    let left = leftover_files(&prefix);
+    if !retired {
+        eprintln!("planner: iceoryx2 domain {prefix} still has live nodes; not removed");
+    }
+    let run = run?;
+    let last = run.last_state;
+    // What happened is what the vehicle's journal says.
+    let journal = JournalSummary::read(&journal_path).map_err(|e| MissionError::Child(e.to_string()))?;
+    let outcome = match (run.finished, journal.outcome()) {
+        (true, Some(o)) => o,
         _ => Outcome::Aborted,
     };
+    let rejected_by_vehicle = last.map_or(0, |s| s.plans_rejected);
     let rejected_vehicle = RejectCounters(last.map_or([0; crate::msg::REJECT_KINDS], |s| s.rejected));
-    let (route, tasks, weight, distance, t_used, rejected_by_vehicle) = match last {
-        Some(s) => (
-            crate::msg::route_ids(&s.route, s.route_len)
-                .iter()
-                .map(|&b| b as usize)
-                .collect(),
-            s.tasks_completed,
-            s.weight,
-            s.distance_m,
-            s.header.mission_time_s,
-            s.plans_rejected,
-        ),
-        None => (Vec::new(), 0, 0.0, 0.0, 0.0, 0),
-    };
-    let c = service.counters;
+    let c = run.totals;
+    let trace = run.trace;
     let report = Report {
         outcome,
-        time_used_s: t_used,
+        time_used_s: journal.time_s(),
         time_available_s: budget,
-        tasks_completed: tasks,
-        weight,
-        distance_m: distance,
-        route,
+        tasks_completed: journal.tasks(),
+        weight: journal.weight(),
+        distance_m: journal.distance_m(),
+        route: journal.route(),
         plans: c.plans,
-        latency_us: service.latency_us,
+        latency_us: c.latency_us,
         deadline_ms: cfg.deadline.as_secs_f64() * 1000.0,
         deadline_misses: c.deadline_misses,
         deadline_cuts: c.deadline_cuts,
         fallbacks: c.fallbacks,
         iterations_total: c.iterations_total,
-        alloc: alloc::counters(),
-        allocator_installed: alloc::installed(),
+        alloc: c.alloc,
+        allocator_installed: run.allocator_installed,
         sensor_updates: c.sensor_updates,
-        rejected: service.rejected,
+        rejected: c.rejected,
         rejected_vehicle,
         plans_rejected_by_vehicle: rejected_by_vehicle,
         seed: a.scenario.seed,
@@ -604,7 +1095,13 @@ fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         time_scale: a.time_scale,
         wall_time_s: wall.elapsed().as_secs_f64(),
         shm_files_left: left.len(),
-        rt_priority: service.rt_priority,
+        planner_process: a.planner_process,
+        faults: run.faults,
+        vehicle_restarts: journal.restarts(),
+        iterations_budget: cfg.iterations,
+        cut: c.cut,
+        rss_kb: run.rss_kb,
+        rt_priority: run.rt_priority,
     };
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();

@@ -1,6 +1,7 @@
 //! `planner serve`: the re-planning service as a process of its own (the
 //! mission runs the same loop in-process; the latency bench starts this).
 
+use std::path::Path;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Duration;
@@ -8,6 +9,7 @@ use std::time::Duration;
 use super::alloc;
 use super::core::{PlannerCore, ServiceConfig, ServiceEvent};
 use super::run::{ExitReason, PlannerPorts, run_service};
+use crate::mission::log::with_log_writer;
 use crate::mission::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
 use crate::msg::{Plan, PlannerStatus, VehicleState, WaypointSnapshot};
 use crate::solver::{Algorithm, Solver};
@@ -79,6 +81,9 @@ pub struct ServeArgs {
     /// (latency is still measured and misses counted).
     #[arg(long)]
     pub lockstep: bool,
+    /// Append the mission log (one JSON line per event) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub log: Option<std::path::PathBuf>,
 }
 
 /// Why the service could not run.
@@ -96,9 +101,39 @@ pub enum ServeError {
     /// The transport failed while running.
     #[error("transport: {0}")]
     Transport(#[from] TransportError),
+    /// The log could not be written.
+    #[error("log: {0}")]
+    Log(String),
 }
 
 impl ServiceArgs {
+    /// The flags that give these settings (to start `planner serve` with them).
+    pub fn to_flags(&self) -> Vec<String> {
+        let mut f = vec![
+            "--deadline-ms".to_string(),
+            self.deadline_ms.to_string(),
+            "--iterations".into(),
+            self.iterations.to_string(),
+            "--algorithm".into(),
+            self.algorithm.to_string(),
+            "--drift-allowance".into(),
+            self.drift_allowance.to_string(),
+            "--replan-threshold-s".into(),
+            self.replan_threshold_s.to_string(),
+            "--reserve-s".into(),
+            self.reserve_s.to_string(),
+            "--planner-seed".into(),
+            self.planner_seed.to_string(),
+        ];
+        if let Some(p) = self.rt_priority {
+            f.extend(["--rt-priority".into(), p.to_string()]);
+        }
+        if let Some(k) = &self.inject_plan {
+            f.extend(["--inject-plan".into(), k.clone()]);
+        }
+        f
+    }
+
     /// The service configuration these flags describe.
     pub fn config(&self, world: &MissionWorld, lockstep: bool) -> Result<ServiceConfig, ServeError> {
         if !(self.deadline_ms.is_finite() && self.deadline_ms > 1.0 && self.deadline_ms <= 60_000.0) {
@@ -247,7 +282,15 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, &rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
-    let exit = run_service(&mut core, &mut ports, &mut |_: &ServiceEvent| {}, &mut |_| true)?;
+    let exit = with_log_writer(args.log.as_deref(), |events: &mut dyn FnMut(&ServiceEvent)| {
+        run_service(&mut core, &mut ports, events, &mut |_| true)
+    })
+    .map_err(|e| {
+        ServeError::Log(format!(
+            "{}: {e}",
+            args.log.as_deref().unwrap_or(Path::new("")).display()
+        ))
+    })??;
     let c = core.counters();
     let a = alloc::counters();
     let h = core.latency_us();

@@ -224,6 +224,24 @@ pub struct ServiceCounters {
     pub last_iterations: u32,
     /// Solver iterations over all plans.
     pub iterations_total: u64,
+    /// Overload figures of the plans cut by the deadline (the anytime path).
+    pub cut: CutCounters,
+}
+
+/// What cutting solves at the deadline cost (issue 4, overload): iterations
+/// run against the budget, and the weight of the cut plans against the
+/// warm start they began from (the previous plan's remainder: what the
+/// vehicle would have followed without the re-plan).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CutCounters {
+    /// Solver iterations of the cut plans.
+    pub iterations: u64,
+    /// Cut plans that had a warm start.
+    pub with_warm_start: u64,
+    /// Weight of those plans.
+    pub weight: f64,
+    /// Weight of their warm starts on the same problem.
+    pub warm_start_weight: f64,
 }
 
 /// Everything a re-plan produced, ready to publish.
@@ -511,12 +529,15 @@ impl PlannerCore {
             self.answered_epoch = epoch;
             return Some(Err(e));
         }
-        let warm = match self.remaining_plan() {
-            Some((r, _)) if self.problem.evaluate(&r).is_some() => {
+        let mut warm_weight = None;
+        let rest = self.remaining_plan();
+        let warm = match rest.and_then(|(r, _)| self.problem.evaluate(&r).map(|e| (r, e))) {
+            Some((r, e)) => {
+                warm_weight = e.feasible.then_some(e.weight);
                 self.warm = r;
                 Some(&self.warm)
             }
-            _ => None,
+            None => None,
         };
         let replan = self.counters.plans as u32 + 1;
         let mut rng = PlannerRng::new(derive_seed(self.cfg.seed, u64::from(replan)));
@@ -554,6 +575,15 @@ impl PlannerCore {
         self.counters.iterations_total += u64::from(outcome.iterations);
         let deadline_cut = outcome.stop == StopReason::Deadline;
         self.counters.deadline_cuts += u64::from(deadline_cut);
+        if deadline_cut {
+            let c = &mut self.counters.cut;
+            c.iterations += u64::from(outcome.iterations);
+            if let Some(w) = warm_weight {
+                c.with_warm_start += 1;
+                c.weight += eval.weight;
+                c.warm_start_weight += w;
+            }
+        }
         self.counters.fallbacks += u64::from(!eval.feasible);
         self.answered_state = answered;
         self.answered_epoch = epoch;

@@ -1,0 +1,304 @@
+//! `planner soak`: N missions back to back, with random faults when asked,
+//! and one summary (`DIR/soak.json`, printed too) of what they came to.
+//!
+//! Contract:
+//! - Mission k (0-based) runs scenario seed `seed + k`, planner seed
+//!   `seed`, fault seed `derive_seed(seed, k)`, in its own iceoryx2 domain
+//!   `<base>k_` and folder `DIR/mission-k`; the same seed gives the same
+//!   missions and the same fault plans.
+//! - Scaled time with `--planner-process` (faults need it); `--lockstep`
+//!   without faults gives reproducible missions.
+//! - Leaks: after each mission its domain is retired and the files it left
+//!   are counted; at the end the whole soak's prefix family is scanned again
+//!   (`shm_files_leaked`). Memory: the peak resident set of each child per
+//!   mission and of this process before and after, so growth from mission
+//!   to mission shows.
+//! - Bad messages (`--bad-messages`): every kind, from all three senders,
+//!   through `planner mission --inject-*` ([`bad_message_flags`]).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Parser;
+use serde_json::{Value, json};
+
+use super::run::{MissionArgs, mission, rss_kb_of};
+use crate::msg::{Outcome, REJECT_KINDS, RejectKind};
+use crate::rng::derive_seed;
+use crate::transport::ipc::leftover_files;
+use crate::transport::{signal, unique_prefix};
+
+/// `planner soak` flags.
+#[derive(Clone, Debug, PartialEq, clap::Args)]
+pub struct SoakArgs {
+    /// Missions to run back to back.
+    #[arg(long)]
+    pub missions: u32,
+    /// Inject faults at random (kills and restarts, pauses).
+    #[arg(long)]
+    pub faults: bool,
+    /// Faults per mission with --faults.
+    #[arg(long, default_value_t = 3)]
+    pub faults_per_mission: usize,
+    /// Base seed (mission k: scenario seed + k).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output folder (soak.json and one folder per mission).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Waypoints per scenario.
+    #[arg(long, default_value_t = 12)]
+    pub nodes: usize,
+    /// Mission seconds per real second.
+    #[arg(long, default_value_t = 3000.0)]
+    pub time_scale: f64,
+    /// Deterministic lockstep missions (no faults).
+    #[arg(long, conflicts_with = "faults")]
+    pub lockstep: bool,
+    /// Stall timeout, real ms.
+    #[arg(long, default_value_t = 1000.0)]
+    pub stall_timeout_ms: f64,
+    /// Also inject bad messages of every kind from all three processes.
+    #[arg(long)]
+    pub bad_messages: bool,
+    /// No per-mission lines.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Flags that make mission `k`'s processes send bad messages: every kind
+/// the wire layer can inject, from the sensor (snapshots), the vehicle
+/// (states) and the planner (plans), each next to the good message it
+/// spoils (`planner mission --inject-*`, issue 4 "bad input"). The same for
+/// every mission: each kind is then rejected in every mission.
+pub fn bad_message_flags(_k: u32) -> Vec<String> {
+    [
+        "--inject-sensor",
+        "all",
+        "--inject-vehicle",
+        "all",
+        "--inject-plan",
+        "all",
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+#[derive(Parser)]
+struct MissionOnly {
+    #[command(flatten)]
+    m: MissionArgs,
+}
+
+fn mission_args(a: &SoakArgs, k: u32, prefix: &str) -> Result<MissionArgs, String> {
+    let mut argv: Vec<String> = vec!["mission".into(), "--quiet".into()];
+    let out = a.out.join(format!("mission-{k}"));
+    argv.extend([
+        "--seed".into(),
+        (a.seed + u64::from(k)).to_string(),
+        "--planner-seed".into(),
+        a.seed.to_string(),
+        "--nodes".into(),
+        a.nodes.to_string(),
+        "--out".into(),
+        out.display().to_string(),
+        "--ipc-prefix".into(),
+        prefix.into(),
+        "--stall-timeout-ms".into(),
+        a.stall_timeout_ms.to_string(),
+    ]);
+    if a.lockstep {
+        argv.push("--lockstep".into());
+    } else {
+        argv.extend([
+            "--time-scale".into(),
+            a.time_scale.to_string(),
+            "--planner-process".into(),
+        ]);
+    }
+    if a.faults {
+        argv.extend([
+            "--faults".into(),
+            a.faults_per_mission.to_string(),
+            "--fault-seed".into(),
+            derive_seed(a.seed, u64::from(k)).to_string(),
+        ]);
+    }
+    if a.bad_messages {
+        argv.extend(bad_message_flags(k));
+    }
+    MissionOnly::try_parse_from(argv)
+        .map(|w| w.m)
+        .map_err(|e| e.to_string().lines().next().unwrap_or("bad mission flags").to_string())
+}
+
+fn add(map: &mut BTreeMap<String, u64>, v: &Value) {
+    if let Some(o) = v.as_object() {
+        for (k, n) in o {
+            *map.entry(k.clone()).or_default() += n.as_u64().unwrap_or(0);
+        }
+    }
+}
+
+/// Runs the soak; the summary as JSON.
+pub fn soak(a: &SoakArgs) -> Result<Value, String> {
+    if a.missions == 0 {
+        return Err("--missions 0: must be at least 1".into());
+    }
+    if !(a.time_scale.is_finite() && a.time_scale > 0.0) {
+        return Err(format!("--time-scale {}: must be > 0", a.time_scale));
+    }
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    signal::install();
+    let base = unique_prefix("k");
+    let me = std::process::id();
+    let rss_self_start = rss_kb_of(me).unwrap_or(0);
+    let mut per_mission = Vec::new();
+    let (mut completed, mut reached_goal, mut deadline_misses, mut steady_allocs, mut leaked) =
+        (0, 0, 0u64, 0u64, 0u64);
+    let mut injected = BTreeMap::new();
+    let mut survived = BTreeMap::new();
+    let mut cleared = BTreeMap::new();
+    let (mut cut_short, mut skipped_late) = (0u64, 0u64);
+    let mut stalls = BTreeMap::new();
+    let mut rejected = [0u64; REJECT_KINDS];
+    let mut rss_children: Vec<[u64; 3]> = Vec::new();
+    let mut rss_self = Vec::new();
+    for k in 0..a.missions {
+        if signal::shutdown_requested() {
+            break;
+        }
+        let prefix = format!("{base}{k}_");
+        let m = mission_args(a, k, &prefix)?;
+        let t0 = std::time::Instant::now();
+        let line = match mission(&m) {
+            Ok((r, _)) => {
+                let ok = matches!(r.outcome, Outcome::GoalReached | Outcome::TimedOut);
+                completed += u64::from(ok);
+                reached_goal += u64::from(r.goal_reached());
+                deadline_misses += r.deadline_misses;
+                steady_allocs += r.alloc.sys_allocs_steady;
+                leaked += r.shm_files_left as u64;
+                // Refusals by both receivers: the planner and the vehicle.
+                for (acc, n) in rejected.iter_mut().zip(r.rejected.0) {
+                    *acc += n;
+                }
+                for (acc, n) in rejected.iter_mut().zip(r.rejected_vehicle.0) {
+                    *acc += n;
+                }
+                rss_children.push(r.rss_kb);
+                let j = r.to_json();
+                let f = &j["faults"];
+                add(&mut injected, &f["injected_by_kind"]);
+                add(&mut survived, &f["survived_by_kind"]);
+                add(&mut cleared, &f["cleared_by_kind"]);
+                cut_short += f["cut_short_by_end"].as_u64().unwrap_or(0);
+                skipped_late += f["skipped_late"].as_u64().unwrap_or(0);
+                add(&mut stalls, &f["stalls_detected"]);
+                json!({
+                    "mission": k,
+                    "seed": m.scenario.seed,
+                    "outcome": j["outcome"],
+                    "tasks": r.tasks_completed,
+                    "weight": r.weight,
+                    "faults_injected": f["injected"],
+                    "faults": f["injected_by_kind"],
+                    "survived": f["survived_by_kind"],
+                    "cleared": f["cleared_by_kind"],
+                    "stalls_detected": f["stalls_detected"],
+                    "rejected_messages": r.rejected.total() + r.rejected_vehicle.total(),
+                    "deadline_misses": r.deadline_misses,
+                    "steady_state_allocations": r.alloc.sys_allocs_steady,
+                    "rss_kb_peak": j["rss_kb_peak"],
+                    "shm_files_left": r.shm_files_left,
+                    "wall_s": t0.elapsed().as_secs_f64(),
+                })
+            }
+            Err(e) => json!({"mission": k, "seed": m.scenario.seed, "error": e.to_string()}),
+        };
+        rss_self.push(rss_kb_of(me).unwrap_or(0));
+        if !a.quiet {
+            println!("{line}");
+        }
+        per_mission.push(line);
+    }
+    // Whatever any mission of this soak left behind, counted again at the end.
+    let left_at_end = leftover_files(&base).len() as u64;
+    let rss = |i: usize| {
+        json!({
+            "start": rss_children.first().map_or(0, |r| r[i]),
+            "end": rss_children.last().map_or(0, |r| r[i]),
+            "max": rss_children.iter().map(|r| r[i]).max().unwrap_or(0),
+        })
+    };
+    let by_kind: serde_json::Map<String, Value> = (0..REJECT_KINDS)
+        .map(|k| (RejectKind::ALL[k].as_str().to_string(), json!(rejected[k])))
+        .collect();
+    Ok(json!({
+        "missions": per_mission.len(),
+        "completed": completed,
+        "reached_goal": reached_goal,
+        "faults_injected": injected.values().sum::<u64>(),
+        "faults_injected_by_kind": injected,
+        "faults_survived": survived.values().sum::<u64>(),
+        "faults_survived_by_kind": survived,
+        "faults_cleared": cleared.values().sum::<u64>(),
+        "faults_cleared_by_kind": cleared,
+        "faults_cut_short_by_mission_end": cut_short,
+        "faults_skipped_late": skipped_late,
+        "stalls_detected": stalls,
+        "rejected_messages": rejected.iter().sum::<u64>(),
+        "rejected_messages_by_kind": by_kind,
+        "bad_messages": a.bad_messages,
+        "deadline_misses": deadline_misses,
+        "steady_state_allocations": steady_allocs,
+        "rss_kb": {
+            "supervisor": {
+                "start": rss_self_start,
+                "after_first": rss_self.first().copied().unwrap_or(0),
+                "end": rss_self.last().copied().unwrap_or(0),
+            },
+            "planner": rss(0),
+            "sensor-sim": rss(1),
+            "vehicle-sim": rss(2),
+        },
+        "shm_files_leaked": leaked + left_at_end,
+        "settings": {
+            "seed": a.seed,
+            "faults": a.faults,
+            "faults_per_mission": if a.faults { a.faults_per_mission } else { 0 },
+            "nodes": a.nodes,
+            "lockstep": a.lockstep,
+            "time_scale": if a.lockstep { Value::Null } else { json!(a.time_scale) },
+        },
+        "per_mission": per_mission,
+    }))
+}
+
+/// Runs `planner soak`: 0 when every mission completed and nothing leaked,
+/// 1 otherwise, 2 on bad arguments.
+pub fn run_soak(a: &SoakArgs) -> ExitCode {
+    match soak(a) {
+        Ok(v) => {
+            let path = a.out.join("soak.json");
+            let text = serde_json::to_string_pretty(&v).unwrap_or_default() + "\n";
+            if let Err(e) = std::fs::write(&path, &text) {
+                eprintln!("planner: error: {}: {e}", path.display());
+                return ExitCode::from(1);
+            }
+            let mut summary = v.clone();
+            if let Some(o) = summary.as_object_mut() {
+                o.remove("per_mission");
+            }
+            println!("{}", serde_json::to_string_pretty(&summary).unwrap_or_default());
+            println!("wrote {}", path.display());
+            let ok = v["completed"] == v["missions"] && v["shm_files_leaked"] == 0;
+            if ok { ExitCode::SUCCESS } else { ExitCode::from(1) }
+        }
+        Err(e) => {
+            eprintln!("planner: error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
