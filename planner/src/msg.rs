@@ -7,7 +7,7 @@
 //!   undefined behaviour (which a `bool` or Rust `enum` field would). Enums
 //!   travel as `u32` codes and are decoded with `from_code`.
 //! - The version is part of the iceoryx2 type name (`#[type_name]`, e.g.
-//!   `auv.Plan.v1`) and of the service name (`auv/<vehicle>/planner/plan/v1`).
+//!   `auv.Plan.v2`) and of the service name (`auv/<vehicle>/planner/plan/v2`).
 //!   A changed layout gets a new version in both, so stale shared memory from
 //!   an older build answers `IncompatibleTypes` instead of being misread.
 //! - Each message starts with a [`Header`]: sequence number, the mission time
@@ -243,13 +243,16 @@ pub enum TriggerKind {
     TimeChanged = 3,
     /// A sensor update made the plan infeasible.
     Infeasible = 4,
+    /// The first snapshot of a restarted sensor (a new sender session):
+    /// the network may have moved on while it was away.
+    SensorBack = 5,
 }
 
 /// planner → vehicle-sim: the route to follow from the node the vehicle is
 /// heading to (or is at) to the goal.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.Plan.v1")]
+#[type_name("auv.Plan.v2")]
 pub struct Plan {
     /// Common header; `mission_time_s` is the vehicle's time when the trigger happened.
     pub header: Header,
@@ -542,7 +545,7 @@ codes!(ObjectiveCode: MaxWeight, PaperCost);
 codes!(VehicleMode: NoPlan, Travelling, Working, Holding, Finished);
 codes!(VehicleEvent: Periodic, Start, Arrival, Tick, Finished);
 codes!(Outcome: Running, GoalReached, TimedOut, Aborted);
-codes!(TriggerKind: Initial, Arrival, EdgeLost, TimeChanged, Infeasible);
+codes!(TriggerKind: Initial, Arrival, EdgeLost, TimeChanged, Infeasible, SensorBack);
 codes!(PlannerPhase: Waiting, Running, Finished);
 
 fn finite(v: f64) -> Result<(), RejectKind> {
@@ -884,7 +887,7 @@ mod tests {
                 "auv.WaypointSnapshot.v1"
             );
             assert_eq!(<VehicleState as ZeroCopySend>::type_name(), "auv.VehicleState.v2");
-            assert_eq!(<Plan as ZeroCopySend>::type_name(), "auv.Plan.v1");
+            assert_eq!(<Plan as ZeroCopySend>::type_name(), "auv.Plan.v2");
             assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v2");
         }
     }
@@ -965,7 +968,8 @@ mod tests {
             assert_eq!(RejectKind::ALL[k as usize], k);
         }
         assert_eq!(TriggerKind::from_code(4), Some(TriggerKind::Infeasible));
-        assert_eq!(TriggerKind::from_code(5), None);
+        assert_eq!(TriggerKind::from_code(5), Some(TriggerKind::SensorBack));
+        assert_eq!(TriggerKind::from_code(6), None);
         assert_eq!(
             VehicleMode::from_code(VehicleMode::Holding as u32),
             Some(VehicleMode::Holding)

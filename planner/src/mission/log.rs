@@ -18,6 +18,7 @@ pub fn trigger_name(k: TriggerKind) -> &'static str {
         TriggerKind::EdgeLost => "edge_lost",
         TriggerKind::TimeChanged => "time_changed",
         TriggerKind::Infeasible => "infeasible",
+        TriggerKind::SensorBack => "sensor_back",
     }
 }
 

@@ -169,7 +169,7 @@ fn rank(k: TriggerKind) -> u8 {
         TriggerKind::Initial | TriggerKind::Arrival => 3,
         TriggerKind::EdgeLost => 2,
         TriggerKind::Infeasible => 1,
-        TriggerKind::TimeChanged => 0,
+        TriggerKind::TimeChanged | TriggerKind::SensorBack => 0,
     }
 }
 
@@ -446,10 +446,17 @@ impl PlannerCore {
     /// `received_ns`: keeps a copy and checks whether it invalidates the
     /// current plan.
     pub fn on_snapshot(&mut self, s: &WaypointSnapshot, received_ns: u64, events: &mut dyn FnMut(&ServiceEvent)) {
+        // A new sender session is a restarted sensor: re-plan on what it
+        // reports even when the usual thresholds would not (issue 4).
+        let sensor_back = self.have_snapshot && s.header.session != self.snapshot.header.session;
         copy_snapshot(s, &mut self.snapshot);
         self.have_snapshot = true;
         self.counters.sensor_updates += 1;
-        let trigger = self.sensor_trigger();
+        let trigger = self.sensor_trigger().or_else(|| {
+            let at_goal = self.vehicle.to_node == self.snapshot.goal as usize;
+            let live = self.vehicle.known && self.plan.is_some() && !self.finished && !at_goal;
+            (sensor_back && live).then_some(TriggerKind::SensorBack)
+        });
         if let Some(kind) = trigger {
             self.trigger(kind, s.header.sent_mono_ns, received_ns, self.vehicle.mission_time_s);
         } else if self.plan.is_some() {
@@ -843,6 +850,34 @@ mod tests {
         let r2 = c.replan().unwrap().unwrap();
         assert_eq!(r2.trigger, TriggerKind::EdgeLost);
         assert!(r2.route.len() < 2 || (r2.route.get(0), r2.route.get(1)) != (a, b));
+    }
+
+    #[test]
+    fn a_restarted_sensor_triggers_a_replan_on_its_first_snapshot() {
+        let inst = random_instance(20, 0.35, 20_000.0, 9);
+        let mut c = core();
+        let mut sink = |_: &ServiceEvent| {};
+        c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
+        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
+        let r = c.replan().unwrap().unwrap();
+        c.published(&r, mono_now_ns(), &mut sink);
+        // The same network from the same sensor: nothing to do.
+        c.on_snapshot(&snapshot(&inst, 1), mono_now_ns(), &mut sink);
+        assert!(!c.has_pending());
+        // The same network from a new sensor session (a restart): re-plan.
+        let mut back = snapshot(&inst, 1);
+        back.header.session = 7;
+        back.header.seq = 1;
+        c.on_snapshot(&back, mono_now_ns(), &mut sink);
+        let r2 = c.replan().unwrap().unwrap();
+        assert_eq!(r2.trigger, TriggerKind::SensorBack);
+        assert!(r2.eval.feasible);
+        // Its next snapshot is ordinary again.
+        c.published(&r2, mono_now_ns(), &mut sink);
+        let mut next = snapshot(&inst, 2);
+        next.header.session = 7;
+        c.on_snapshot(&next, mono_now_ns(), &mut sink);
+        assert!(!c.has_pending());
     }
 
     #[test]

@@ -18,7 +18,7 @@
 //! |---|---|---|
 //! | waypoints | `auv/<vehicle>/sensor/waypoints/v1` | sensor → planner, vehicle |
 //! | vehicle state | `auv/<vehicle>/vehicle/state/v2` | vehicle → planner, sensor |
-//! | plan | `auv/<vehicle>/planner/plan/v1` | planner → vehicle |
+//! | plan | `auv/<vehicle>/planner/plan/v2` | planner → vehicle |
 //! | planner status | `auv/<vehicle>/planner/status/v2` | planner → vehicle |
 //!
 //! Wake services: `auv/<vehicle>/<role>/wake/v1`.
@@ -55,7 +55,7 @@ impl Topic {
         match self {
             Self::Waypoints => "sensor/waypoints/v1",
             Self::VehicleState => "vehicle/state/v2",
-            Self::Plan => "planner/plan/v1",
+            Self::Plan => "planner/plan/v2",
             Self::Status => "planner/status/v2",
             Self::BenchPing => "bench/ping/v1",
             Self::BenchPong => "bench/pong/v1",
@@ -370,7 +370,7 @@ mod tests {
     fn service_names_are_versioned_and_namespaced() {
         let o = IpcOptions::new(Some("t_"), "auv1", WaitMode::Event).unwrap();
         assert_eq!(o.service_name(Topic::Waypoints), "auv/auv1/sensor/waypoints/v1");
-        assert_eq!(o.service_name(Topic::Plan), "auv/auv1/planner/plan/v1");
+        assert_eq!(o.service_name(Topic::Plan), "auv/auv1/planner/plan/v2");
         assert_eq!(o.wake_name(Role::Planner), "auv/auv1/planner/wake/v1");
     }
 
