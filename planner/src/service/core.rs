@@ -452,11 +452,9 @@ impl PlannerCore {
         copy_snapshot(s, &mut self.snapshot);
         self.have_snapshot = true;
         self.counters.sensor_updates += 1;
-        let trigger = self.sensor_trigger().or_else(|| {
-            let at_goal = self.vehicle.to_node == self.snapshot.goal as usize;
-            let live = self.vehicle.known && self.plan.is_some() && !self.finished && !at_goal;
-            (sensor_back && live).then_some(TriggerKind::SensorBack)
-        });
+        let trigger = self
+            .sensor_trigger()
+            .or_else(|| (sensor_back && self.plan_in_progress()).then_some(TriggerKind::SensorBack));
         if let Some(kind) = trigger {
             self.trigger(kind, s.header.sent_mono_ns, received_ns, self.vehicle.mission_time_s);
         } else if self.plan.is_some() {
@@ -495,10 +493,15 @@ impl PlannerCore {
         Some((r, i))
     }
 
-    fn sensor_trigger(&mut self) -> Option<TriggerKind> {
-        // Nothing is left to plan once the vehicle heads to (or works at) the goal.
+    /// A plan is being followed and something is left to re-plan: nothing
+    /// is once the vehicle heads to (or works at) the goal.
+    fn plan_in_progress(&self) -> bool {
         let at_goal = self.vehicle.to_node == self.snapshot.goal as usize;
-        if !self.vehicle.known || self.plan.is_none() || self.finished || at_goal {
+        self.vehicle.known && self.plan.is_some() && !self.finished && !at_goal
+    }
+
+    fn sensor_trigger(&mut self) -> Option<TriggerKind> {
+        if !self.plan_in_progress() {
             return None;
         }
         let (start, budget, excluded) = self.planning_frame();
