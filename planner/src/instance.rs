@@ -13,6 +13,15 @@
 
 use serde::{Deserialize, Serialize};
 
+/// 3-D Euclidean distance between two points (x, y, z in m), m: the one
+/// formula the format's figures use, so every copy of a position (instance,
+/// world, snapshot, vehicle) measures it bit for bit alike.
+#[inline]
+pub fn distance_3d_m(p: [f64; 3], q: [f64; 3]) -> f64 {
+    let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+    (dx * dx + dy * dy + dz * dz).sqrt()
+}
+
 /// The only accepted value of the `format` field.
 pub const FORMAT_TAG: &str = "auv-route-instance/1";
 
@@ -392,8 +401,7 @@ impl Instance {
     #[inline]
     pub fn distance(&self, a: usize, b: usize) -> f64 {
         let (p, q) = (&self.nodes[a], &self.nodes[b]);
-        let (dx, dy, dz) = (p.x - q.x, p.y - q.y, p.z - q.z);
-        (dx * dx + dy * dy + dz * dz).sqrt()
+        distance_3d_m([p.x, p.y, p.z], [q.x, q.y, q.z])
     }
 
     /// The edge joining `a` and `b`, if any (linear scan: not for hot paths).

@@ -15,6 +15,7 @@
 //! at the same mission times give bit-identical trajectories, whatever the
 //! wall-clock pacing.
 
+use planner::instance::distance_3d_m as dist;
 use planner::mission::journal::Resume;
 use planner::msg::{
     Outcome, Plan, RejectKind, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids,
@@ -447,11 +448,6 @@ impl VehicleSim {
     pub fn totals(&self) -> (u32, f64, f64) {
         (self.tasks, self.weight, self.distance_m)
     }
-}
-
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let (dx, dy, dz) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-    (dx * dx + dy * dy + dz * dz).sqrt()
 }
 
 #[cfg(test)]

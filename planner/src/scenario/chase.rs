@@ -15,6 +15,7 @@
 
 use super::{World, sub_stream};
 use crate::chart::WaterMap;
+use crate::instance::distance_3d_m as dist;
 use crate::problem::MAX_NODES;
 
 /// Stream of the chase simulations (one sub-stream per waypoint).
@@ -84,11 +85,6 @@ impl World {
         }
         out
     }
-}
-
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let (dx, dy, dz) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-    (dx * dx + dy * dy + dz * dz).sqrt()
 }
 
 #[cfg(test)]

@@ -530,8 +530,7 @@ impl World {
     #[inline]
     pub fn distance_m(&self, a: usize, b: usize) -> f64 {
         let (p, q) = (&self.position[a], &self.position[b]);
-        let (dx, dy, dz) = (p.x - q.x, p.y - q.y, p.z - q.z);
-        (dx * dx + dy * dy + dz * dz).sqrt()
+        crate::instance::distance_3d_m([p.x, p.y, p.z], [q.x, q.y, q.z])
     }
 
     /// Node count n.

@@ -119,8 +119,7 @@ pub fn to_instance(s: &WaypointSnapshot, name: &str) -> Instance {
 #[inline]
 pub fn distance_m(s: &WaypointSnapshot, a: usize, b: usize) -> f64 {
     let (p, q) = (&s.nodes[a], &s.nodes[b]);
-    let (dx, dy, dz) = (p.x - q.x, p.y - q.y, p.z - q.z);
-    (dx * dx + dy * dy + dz * dz).sqrt()
+    crate::instance::distance_3d_m([p.x, p.y, p.z], [q.x, q.y, q.z])
 }
 
 /// Refills `p` from a validated snapshot, starting at `start` with
