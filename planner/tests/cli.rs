@@ -1214,3 +1214,11 @@ fn quality_certifies_a_gap_bound_when_the_exact_search_is_cut() {
         "the bound's gap must exceed the best route's: {row:?}"
     );
 }
+
+#[test]
+fn bench_latency_refuses_a_bad_pause_before_starting_anything() {
+    for value in ["-1", "NaN", "20000"] {
+        let out = planner(&["bench-latency", "--triggers", "1", &format!("--pause-ms={value}")]);
+        assert_input_error(&out, &[&format!("--pause-ms {value}")]);
+    }
+}
