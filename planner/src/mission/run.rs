@@ -196,6 +196,9 @@ pub fn sibling_binary(name: &str) -> Result<PathBuf, MissionError> {
     let exe = std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?;
     let dir = exe.parent().unwrap_or(Path::new("."));
     let p = dir.join(name);
+    if !p.is_file() {
+        build_sibling_under_cargo(name, dir);
+    }
     if p.is_file() {
         Ok(p)
     } else {
@@ -204,6 +207,28 @@ pub fn sibling_binary(name: &str) -> Result<PathBuf, MissionError> {
             exe.display()
         )))
     }
+}
+
+/// `cargo run -p planner` builds the planner alone, so on a fresh checkout
+/// the simulators are missing: when started by cargo (it sets `CARGO` and
+/// `CARGO_MANIFEST_DIR`), build the missing one with the same profile into
+/// the same target folder. Best effort: the caller reports what is still
+/// missing.
+fn build_sibling_under_cargo(name: &str, exe_dir: &Path) {
+    let (Some(cargo), Some(manifest_dir)) = (std::env::var_os("CARGO"), std::env::var_os("CARGO_MANIFEST_DIR")) else {
+        return;
+    };
+    let profile = match exe_dir.file_name().and_then(|d| d.to_str()) {
+        Some("debug") => "dev",
+        Some(p) => p,
+        None => return,
+    };
+    eprintln!("planner: building {name} (profile {profile}) for the mission…");
+    let _ = Command::new(cargo)
+        .current_dir(manifest_dir)
+        .args(["build", "--quiet", "--profile", profile, "-p", name])
+        .stdin(Stdio::null())
+        .status();
 }
 
 /// A child process and where its stderr goes.
