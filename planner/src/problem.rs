@@ -158,9 +158,8 @@ struct Tables {
     /// kept apart.
     reach_s: [f64; CELLS],
     /// Edge time T_ab, s; +∞ where there is no edge. Duplicates
-    /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row, and so
-    /// the decoder's step → time → next step chain loads from this small
-    /// table rather than the 4× larger `edge`.
+    /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row (the
+    /// decoder's repair relaxes whole rows).
     time_s: [f64; CELLS],
     /// Everything a step a → b adds to a route's figures.
     edge: [EdgeData; CELLS],
@@ -179,6 +178,10 @@ pub struct Problem {
     excluded: NodeSet,
     prize: [f64; MAX_NODES],
     to_goal_s: [f64; MAX_NODES],
+    /// Per row u: the largest look-ahead over u's neighbours (+∞ if one
+    /// cannot reach the goal, 0 with none). With at least this much time
+    /// left, every neighbour fits, and a decoder need not read the row.
+    reach_max_s: [f64; MAX_NODES],
     tables: Box<Tables>,
 }
 
@@ -216,6 +219,7 @@ impl Problem {
             excluded: NodeSet::EMPTY,
             prize: [0.0; MAX_NODES],
             to_goal_s: [f64::INFINITY; MAX_NODES],
+            reach_max_s: [0.0; MAX_NODES],
             tables,
         }
     }
@@ -353,6 +357,10 @@ impl Problem {
                 let cell = u * stride + v;
                 self.tables.reach_s[cell] = self.tables.time_s[cell] + self.to_goal_s[v];
             }
+            self.reach_max_s[u] = self.adjacency[u]
+                .iter()
+                .map(|v| self.tables.reach_s[u * stride + v])
+                .fold(0.0, f64::max);
         }
         if !self.to_goal_s[self.start].is_finite() {
             return Err(ProblemError::GoalUnreachable {
@@ -479,6 +487,12 @@ impl Problem {
     pub(crate) fn to_goal_row(&self) -> &[f64; MAX_NODES] {
         &self.to_goal_s
     }
+    /// The largest look-ahead from `u` (< n) to any of its neighbours: with
+    /// at least this much time left at `u`, every neighbour fits.
+    #[inline]
+    pub fn reach_max_s(&self, u: usize) -> f64 {
+        self.reach_max_s[u]
+    }
     /// Row `u` (< n) of the look-ahead table: [`Problem::stride`] entries,
     /// +∞ in the padding columns n..stride.
     #[inline]
@@ -527,6 +541,26 @@ mod tests {
         assert_eq!(p.to_goal_s(0), 310.0);
         assert_eq!(p.to_goal_s(1), 220.0);
         assert_eq!(p.reach_row(0)[1], 110.0 + 220.0);
+    }
+
+    #[test]
+    fn reach_max_is_the_largest_look_ahead_over_the_neighbours() {
+        let inst = crate::fixtures::random_instance(30, 0.4, 20_000.0, 5);
+        let mut p = Problem::new();
+        let mut excluded = NodeSet::EMPTY;
+        excluded.insert(3);
+        p.load_instance(&inst, 0, excluded, 20_000.0).unwrap();
+        for u in 0..p.n() {
+            let expected = p.neighbours(u).iter().map(|v| p.reach_row(u)[v]).fold(0.0, f64::max);
+            assert_eq!(p.reach_max_s(u), expected, "row {u}");
+            // Non-neighbours never fit, whatever the slack.
+            for v in 0..p.n() {
+                if !p.has_edge(u, v) {
+                    assert_eq!(p.reach_row(u)[v], f64::INFINITY);
+                }
+            }
+        }
+        assert!(!p.neighbours(0).contains(3));
     }
 
     #[test]
