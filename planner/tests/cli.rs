@@ -1222,3 +1222,16 @@ fn bench_latency_refuses_a_bad_pause_before_starting_anything() {
         assert_input_error(&out, &[&format!("--pause-ms {value}")]);
     }
 }
+
+#[test]
+fn bench_latency_refuses_a_bad_receiver_priority_before_starting_anything() {
+    for value in ["-1", "100"] {
+        let out = planner(&[
+            "bench-latency",
+            "--triggers",
+            "1",
+            &format!("--receiver-rt-priority={value}"),
+        ]);
+        assert_input_error(&out, &[&format!("--receiver-rt-priority {value}"), "between 0 and 99"]);
+    }
+}

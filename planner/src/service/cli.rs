@@ -239,16 +239,31 @@ pub fn open_ports(
 pub fn prepare_service_thread(rt_priority: Option<i32>, default_rt: bool) -> Result<Option<i32>, ServeError> {
     alloc::watch_this_thread();
     alloc::reserve_pool();
-    let (prio, required) = match rt_priority {
-        Some(0) => return Ok(None),
-        Some(p) if (1..=99).contains(&p) => (p, true),
-        Some(p) => {
-            return Err(ServeError::Usage(format!(
-                "--rt-priority {p}: must be between 0 and 99"
-            )));
-        }
-        None if !default_rt => return Ok(None),
-        None => (DEFAULT_RT_PRIORITY, false),
+    let default = default_rt.then_some(DEFAULT_RT_PRIORITY);
+    request_fifo(
+        "--rt-priority",
+        rt_priority,
+        default,
+        "the service runs on normal scheduling, so other work can push plans past their deadline",
+    )
+    .map_err(ServeError::Usage)
+}
+
+/// Puts the calling thread on SCHED_FIFO: at `requested` if given (0 keeps
+/// normal scheduling; a refusal is an error naming `flag`), else at
+/// `default` if any (a refusal is a warning that ends with `fallback`, and
+/// the thread stays on normal scheduling). Returns the RT priority in force.
+pub fn request_fifo(
+    flag: &str,
+    requested: Option<i32>,
+    default: Option<i32>,
+    fallback: &str,
+) -> Result<Option<i32>, String> {
+    let (prio, required) = match (requested, default) {
+        (Some(0), _) | (None, None) => return Ok(None),
+        (Some(p), _) if (1..=99).contains(&p) => (p, true),
+        (Some(p), _) => return Err(format!("{flag} {p}: must be between 0 and 99")),
+        (None, Some(p)) => (p, false),
     };
     let param = libc::sched_param { sched_priority: prio };
     // SAFETY: pthread_self() is this thread; `param` is a valid sched_param.
@@ -258,14 +273,11 @@ pub fn prepare_service_thread(rt_priority: Option<i32>, default_rt: bool) -> Res
     }
     let why = std::io::Error::from_raw_os_error(rc);
     if required {
-        return Err(ServeError::Usage(format!(
-            "--rt-priority {prio}: SCHED_FIFO refused ({why}); it needs CAP_SYS_NICE or root"
-        )));
+        return Err(format!(
+            "{flag} {prio}: SCHED_FIFO refused ({why}); it needs CAP_SYS_NICE or root"
+        ));
     }
-    eprintln!(
-        "planner: warning: SCHED_FIFO refused ({why}); the service runs on normal scheduling, \
-         so other work can push plans past their deadline (--rt-priority 0 silences this)"
-    );
+    eprintln!("planner: warning: SCHED_FIFO refused ({why}); {fallback} ({flag} 0 silences this)");
     Ok(None)
 }
 
