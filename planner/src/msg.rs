@@ -218,8 +218,10 @@ pub struct VehicleState {
     pub tasks_completed: u32,
     /// Lockstep: 1 when the vehicle waits for the planner's answer to this message.
     pub needs_answer: u32,
-    /// Plans rejected by the vehicle (stale start, invalid route).
-    pub plans_rejected: u32,
+    /// Plans the vehicle set aside as stale (they answered a position it
+    /// had already left, or came after the mission ended); refused plans
+    /// are counted in `rejected`, by kind.
+    pub stale_plans: u32,
     /// Valid entries of `route`.
     pub route_len: u32,
     /// Input messages the vehicle rejected so far, by [`RejectKind`]

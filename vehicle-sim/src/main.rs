@@ -31,7 +31,7 @@ use planner::transport::guard::Guarded;
 use planner::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use planner::transport::{IpcArgs, Outbox, Role, Wake, Waker, signal};
 use planner::wire::{FaultCycle, VEHICLE_FAULTS, WireRules, corrupt_state, tamper_header};
-use vehicle_sim::sim::{SimEvent, VehicleSim};
+use vehicle_sim::sim::{PlanOffer, SimEvent, VehicleSim};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -125,7 +125,8 @@ impl Vehicle {
         let mut accepted = Vec::new();
         self.ports.plans.drain(&mut |p| match sim.offer_plan(p) {
             Err(kind) => rejected.push((kind, p.header.fingerprint)),
-            Ok(()) => accepted.push(JournalEvent::Plan {
+            Ok(PlanOffer::Stale) => {}
+            Ok(PlanOffer::Taken) => accepted.push(JournalEvent::Plan {
                 t: sim.time(),
                 seq: p.header.seq,
                 route: sim.plan().iter().map(|&b| b as usize).collect(),

@@ -52,6 +52,15 @@ enum Phase {
     Task(f64),
 }
 
+/// What became of an offered plan that was not refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlanOffer {
+    /// Followed from now on.
+    Taken,
+    /// Set aside: it answered a position the vehicle has left.
+    Stale,
+}
+
 /// The simulated vehicle.
 pub struct VehicleSim {
     net: Box<WaypointSnapshot>,
@@ -79,7 +88,7 @@ pub struct VehicleSim {
     weight: f64,
     distance_m: f64,
     outcome: Outcome,
-    plans_rejected: u32,
+    stale_plans: u32,
 }
 
 impl Default for VehicleSim {
@@ -113,7 +122,7 @@ impl VehicleSim {
             weight: 0.0,
             distance_m: 0.0,
             outcome: Outcome::Running,
-            plans_rejected: 0,
+            stale_plans: 0,
         }
     }
 
@@ -172,14 +181,19 @@ impl VehicleSim {
     }
 
     /// Offers a validated plan. It is taken when it starts where the vehicle
-    /// will be free, ends at the goal (else `BadPlan`), and uses only edges of
-    /// the latest snapshot (else `NonEdge`) and waypoints not yet visited
-    /// (else `VisitedNode`).
-    pub fn offer_plan(&mut self, p: &Plan) -> Result<(), RejectKind> {
+    /// will be free, ends at the goal, and uses only edges of the latest
+    /// snapshot and waypoints not yet visited. It is set aside as stale,
+    /// not refused, when it answers a position the vehicle has since left
+    /// (it starts at a waypoint already visited: at speed, the vehicle can
+    /// arrive and move on while the plan is on its way) or comes after the
+    /// mission ended. Otherwise it is refused: `NodeOutOfRange`, `BadPlan`
+    /// (no snapshot yet, wrong start, or not ending at the goal), `NonEdge`
+    /// or `VisitedNode`.
+    pub fn offer_plan(&mut self, p: &Plan) -> Result<PlanOffer, RejectKind> {
         let ids = route_ids(&p.route, p.route_len);
         let verdict = self.check_plan(ids);
         match verdict {
-            Ok(()) => {
+            Ok(PlanOffer::Taken) => {
                 self.plan = Route::new();
                 for &id in ids {
                     self.plan.push(id as usize);
@@ -189,21 +203,31 @@ impl VehicleSim {
                 self.ever_planned = true;
                 self.plan_seq = p.header.seq;
             }
-            Err(_) => self.plans_rejected += 1,
+            Ok(PlanOffer::Stale) => self.stale_plans += 1,
+            Err(_) => {}
         }
         verdict
     }
 
-    fn check_plan(&self, ids: &[u8]) -> Result<(), RejectKind> {
-        if !self.have_net || self.outcome != Outcome::Running {
+    fn check_plan(&self, ids: &[u8]) -> Result<PlanOffer, RejectKind> {
+        if !self.have_net {
             return Err(RejectKind::BadPlan);
         }
         let n = (self.net.node_count as usize).min(MAX_NODES);
         if ids.iter().any(|&id| id as usize >= n) {
             return Err(RejectKind::NodeOutOfRange);
         }
-        if ids.first().map(|&id| id as usize) != Some(self.to) || ids.last().map(|&id| id as usize) != Some(self.goal())
-        {
+        if self.outcome != Outcome::Running {
+            return Ok(PlanOffer::Stale);
+        }
+        let first = ids.first().map(|&id| id as usize);
+        if first != Some(self.to) {
+            return match first {
+                Some(f) if self.visited.contains(f) => Ok(PlanOffer::Stale),
+                _ => Err(RejectKind::BadPlan),
+            };
+        }
+        if ids.last().map(|&id| id as usize) != Some(self.goal()) {
             return Err(RejectKind::BadPlan);
         }
         let mut seen = NodeSet::EMPTY;
@@ -217,7 +241,7 @@ impl VehicleSim {
                 return Err(RejectKind::NonEdge);
             }
         }
-        Ok(())
+        Ok(PlanOffer::Taken)
     }
 
     /// Mission time of the next event if nothing changes, s (∞ while holding
@@ -421,7 +445,7 @@ impl VehicleSim {
         m.arrivals = self.arrivals;
         m.tasks_completed = self.tasks;
         m.needs_answer = u32::from(needs_answer);
-        m.plans_rejected = self.plans_rejected;
+        m.stale_plans = self.stale_plans;
         m.route_len = self.route.len() as u32;
         m.route[..self.route.len()].copy_from_slice(self.route.as_bytes());
     }
@@ -555,10 +579,12 @@ mod tests {
             Err(RejectKind::VisitedNode),
             "0 visited"
         );
-        v.offer_plan(&plan(&[1, 2, 3], 7)).unwrap();
+        // Planned from 0, which the vehicle has left: stale, not refused.
+        assert_eq!(v.offer_plan(&plan(&[0, 2, 3], 8)), Ok(PlanOffer::Stale));
+        assert_eq!(v.offer_plan(&plan(&[1, 2, 3], 7)), Ok(PlanOffer::Taken));
         let mut m = *boxed_zeroed::<VehicleState>();
         v.fill_state(VehicleEvent::Periodic, 1000.0, false, &mut m);
-        assert_eq!(m.plans_rejected, 5);
+        assert_eq!(m.stale_plans, 1);
         assert_eq!(m.plan_seq, 7);
         assert_eq!(m.eta_free_s, 5.0);
         assert_eq!(m.mode, VehicleMode::Working as u32);

@@ -5,10 +5,12 @@
 //! never panics and its travelled route stays a valid one.
 
 use planner::fixtures::random_instance;
-use planner::msg::{Header, Plan, RejectKind, VehicleEvent, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids};
+use planner::msg::{
+    Header, Outcome, Plan, RejectKind, VehicleEvent, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids,
+};
 use planner::service::network::{find_edge, write_snapshot};
 use proptest::prelude::*;
-use vehicle_sim::sim::{SimEvent, VehicleSim};
+use vehicle_sim::sim::{PlanOffer, SimEvent, VehicleSim};
 
 fn plan(ids: &[u8], seq: u64) -> Plan {
     let mut p = *boxed_zeroed::<Plan>();
@@ -58,7 +60,17 @@ proptest! {
                 route.push(goal);
             }
             match v.offer_plan(&plan(&route, k as u64 + 1)) {
-                Ok(()) => {
+                Ok(PlanOffer::Stale) => {
+                    // Only after the mission, or a plan from a waypoint the vehicle has left.
+                    let left_behind = route
+                        .first()
+                        .is_some_and(|&f| u32::from(f) != before.to_node && visited.contains(&f));
+                    prop_assert!(
+                        before.outcome != Outcome::Running as u32 || left_behind,
+                        "{:?} stale", route
+                    );
+                }
+                Ok(PlanOffer::Taken) => {
                     prop_assert_eq!(route.first().copied(), Some(before.to_node as u8));
                     prop_assert_eq!(route.last().copied(), Some(goal));
                     for w in route.windows(2) {

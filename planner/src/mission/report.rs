@@ -45,8 +45,9 @@ pub struct Report {
     pub rejected: RejectCounters,
     /// Input the vehicle rejected, by kind (from its last state message).
     pub rejected_vehicle: RejectCounters,
-    /// Plans the vehicle refused.
-    pub plans_rejected_by_vehicle: u32,
+    /// Plans the vehicle set aside as stale (not faults: at speed, a plan
+    /// can arrive after the vehicle left the waypoint it was planned from).
+    pub stale_plans: u32,
     /// Scenario seed.
     pub seed: u64,
     /// Planner seed.
@@ -142,7 +143,7 @@ impl Report {
                 "planner": kinds(&self.rejected),
                 "vehicle": kinds(&self.rejected_vehicle),
             },
-            "plans_rejected_by_vehicle": self.plans_rejected_by_vehicle,
+            "stale_plans": self.stale_plans,
             "seed": self.seed,
             "rt_priority": self.rt_priority,
             "planner_seed": self.planner_seed,
@@ -207,7 +208,7 @@ impl Report {
              planner: {} plans ({} re-plans), latency p50 {} µs, p99 {} µs, max {} µs; \
              {} deadline misses (deadline {} ms), {} cut by the deadline, {} fallbacks\n\
              allocations in steady state: {} system, {} pool blocks (high water {} of {}); \
-             {} sensor updates; {} rejected messages{}\n\
+             {} sensor updates; {} rejected messages{}; {} stale plans set aside by the vehicle\n\
              ({}; {}, planner on {}, wall time {:.1} s)",
             self.time_used_s,
             self.time_available_s,
@@ -238,6 +239,7 @@ impl Report {
                     String::new()
                 }
             },
+            self.stale_plans,
             self.scenario,
             if self.lockstep {
                 "lockstep".to_string()

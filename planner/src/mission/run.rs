@@ -1087,7 +1087,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         (true, Some(o)) => o,
         _ => Outcome::Aborted,
     };
-    let rejected_by_vehicle = last.map_or(0, |s| s.plans_rejected);
+    let stale_plans = last.map_or(0, |s| s.stale_plans);
     let rejected_vehicle = RejectCounters(last.map_or([0; crate::msg::REJECT_KINDS], |s| s.rejected));
     let c = run.totals;
     let trace = run.trace;
@@ -1111,7 +1111,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         sensor_updates: c.sensor_updates,
         rejected: c.rejected,
         rejected_vehicle,
-        plans_rejected_by_vehicle: rejected_by_vehicle,
+        stale_plans,
         seed: a.scenario.seed,
         planner_seed: a.service.planner_seed,
         fingerprint,
