@@ -160,7 +160,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
     let mut injected = BTreeMap::new();
     let mut survived = BTreeMap::new();
     let mut cleared = BTreeMap::new();
-    let (mut cut_short, mut skipped_late) = (0u64, 0u64);
+    let (mut cut_short, mut skipped_late, mut stale_plans) = (0u64, 0u64, 0u64);
     let mut stalls = BTreeMap::new();
     let mut rejected = [0u64; REJECT_KINDS];
     let mut rss_children: Vec<[u64; 3]> = Vec::new();
@@ -178,6 +178,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                 completed += u64::from(ok);
                 reached_goal += u64::from(r.goal_reached());
                 deadline_misses += r.deadline_misses;
+                stale_plans += u64::from(r.stale_plans);
                 steady_allocs += r.alloc.sys_allocs_steady;
                 leaked += r.shm_files_left as u64;
                 // Refusals by both receivers: the planner and the vehicle.
@@ -208,6 +209,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                     "cleared": f["cleared_by_kind"],
                     "stalls_detected": f["stalls_detected"],
                     "rejected_messages": r.rejected.total() + r.rejected_vehicle.total(),
+                    "stale_plans": r.stale_plans,
                     "deadline_misses": r.deadline_misses,
                     "steady_state_allocations": r.alloc.sys_allocs_steady,
                     "rss_kb_peak": j["rss_kb_peak"],
@@ -251,6 +253,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         "rejected_messages": rejected.iter().sum::<u64>(),
         "rejected_messages_by_kind": by_kind,
         "bad_messages": a.bad_messages,
+        "stale_plans": stale_plans,
         "deadline_misses": deadline_misses,
         "steady_state_allocations": steady_allocs,
         "rss_kb": {
