@@ -40,10 +40,10 @@
 //!   overlaps their serial scan → pick → next-row chains; the solvers decode
 //!   in pairs.
 //! - A step carries only the route's time (the next step's slack needs
-//!   it, read from the edge's record, whose cache line the final sum then
-//!   finds in cache); distance, weight, risk and tasks are summed once the
-//!   route is known, in the same order, so the figures are bit-for-bit
-//!   those of a step-by-step sum.
+//!   it; read from the dense time table, a quarter of the edge records'
+//!   size, so it stays in L1 on small networks); distance, weight, risk
+//!   and tasks are summed once the route is known, in the same order, so
+//!   the figures are bit-for-bit those of a step-by-step sum.
 //! - The repair runs, per cut point, an A* search with the look-ahead's
 //!   shortest time home as heuristic, pruned by the time left, so it only
 //!   explores near-quickest paths (`Decoder::repair`).
@@ -520,9 +520,8 @@ impl Decoder {
         }
         let next = key_id(best);
         // Only the time is kept while walking (the next step waits for it);
-        // the other figures are summed once the route is known (`finish`),
-        // from the same record, so that line is then in cache.
-        w.e.time_s += p.edge(w.cur, next).time_s;
+        // the other figures are summed once the route is known (`finish`).
+        w.e.time_s += p.time_s(w.cur, next);
         out.push(next);
         w.visited |= 1 << next;
         if !AVX512 {

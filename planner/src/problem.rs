@@ -158,8 +158,9 @@ struct Tables {
     /// kept apart.
     reach_s: [f64; CELLS],
     /// Edge time T_ab, s; +∞ where there is no edge. Duplicates
-    /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row (the
-    /// decoder's repair relaxes whole rows).
+    /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row, and so
+    /// the decoder's step → time → next step chain loads from this small
+    /// table rather than the 4× larger `edge`.
     time_s: [f64; CELLS],
     /// Everything a step a → b adds to a route's figures.
     edge: [EdgeData; CELLS],
