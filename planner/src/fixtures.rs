@@ -73,3 +73,16 @@ pub fn random_instance(n: usize, density: f64, budget: f64, seed: u64) -> Instan
         objective: Objective::MaxWeight,
     }
 }
+
+/// A plan message through `ids` with sequence number `seq`, every other
+/// field zero (for tests of a plan's receiver).
+pub fn plan_through(ids: &[u8], seq: u64) -> crate::msg::Plan {
+    let mut p = *crate::msg::boxed_zeroed::<crate::msg::Plan>();
+    p.header = crate::msg::Header {
+        seq,
+        ..crate::msg::Header::default()
+    };
+    p.route_len = ids.len() as u32;
+    p.route[..ids.len()].copy_from_slice(ids);
+    p
+}

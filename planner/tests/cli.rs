@@ -857,23 +857,31 @@ fn montecarlo_rejects_bad_arguments() {
 const QUALITY_HEADER: &str =
     "instance,deadline_ms,algorithm,score,optimum,gap,gap_bound,solve_ms,feasible,optimum_source";
 
+/// Runs `planner quality --instances DIR FLAGS… --out CSV`, which must
+/// succeed and write the documented header; returns its stdout and the
+/// CSV's rows, split into fields.
+fn run_quality(instances: &str, flags: &[&str], csv: &Path) -> (String, Vec<Vec<String>>) {
+    let mut args = vec!["quality", "--instances", instances];
+    args.extend_from_slice(flags);
+    args.extend(["--out", path_str(csv)]);
+    let out = planner(&args);
+    assert_ok(&out);
+    let body = std::fs::read_to_string(csv).unwrap();
+    let mut lines = body.lines();
+    assert_eq!(lines.next(), Some(QUALITY_HEADER));
+    let rows = lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
+    (stdout(&out), rows)
+}
+
 #[test]
 fn quality_reports_gaps_on_classic_instances() {
     let dir = scratch("quality");
     let csv = dir.join("quality.csv");
-    let out = planner(&[
-        "quality",
-        "--instances",
+    let (text, rows) = run_quality(
         &format!("{DATA}/op"),
-        "--deadline-ms",
-        "20,5",
-        "--algorithms",
-        "auto,pso",
-        "--out",
-        path_str(&csv),
-    ]);
-    assert_ok(&out);
-    let text = stdout(&out);
+        &["--deadline-ms", "20,5", "--algorithms", "auto,pso"],
+        &csv,
+    );
     for needle in [
         "3 instances",
         "deadline 20 ms",
@@ -886,14 +894,10 @@ fn quality_reports_gaps_on_classic_instances() {
         assert!(text.contains(needle), "{needle:?} missing from:\n{text}");
     }
     let best = best_known();
-    let body = std::fs::read_to_string(&csv).unwrap();
-    let mut lines = body.lines();
-    assert_eq!(lines.next(), Some(QUALITY_HEADER));
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 12, "3 instances x 2 deadlines x 2 algorithms");
     for r in &rows {
         assert!(r[1] == "20" || r[1] == "5", "{r:?}");
-        let optimum = best.get(r[0]).unwrap().score;
+        let optimum = best.get(r[0].as_str()).unwrap().score;
         assert_eq!(r[4].parse::<f64>().unwrap(), optimum);
         let score: f64 = r[3].parse().unwrap();
         assert!(score <= optimum, "{r:?}");
@@ -918,24 +922,12 @@ fn quality_computes_the_optimum_with_the_exact_solver() {
         );
     }
     let csv = dir.join("q.csv");
-    let out = planner(&[
-        "quality",
-        "--instances",
+    let (text, rows) = run_quality(
         path_str(&instances),
-        "--deadline-ms",
-        "5",
-        "--algorithms",
-        "pso,auto",
-        "--clock",
-        "cpu",
-        "--out",
-        path_str(&csv),
-    ]);
-    assert_ok(&out);
-    let text = stdout(&out);
+        &["--deadline-ms", "5", "--algorithms", "pso,auto", "--clock", "cpu"],
+        &csv,
+    );
     assert!(text.contains("exact solver on 2 instances: 2 proved"), "{text}");
-    let body = std::fs::read_to_string(&csv).unwrap();
-    let rows: Vec<Vec<&str>> = body.lines().skip(1).map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 4);
     for r in &rows {
         // An independent check of the optimum: no algorithm may beat it.
@@ -1189,24 +1181,20 @@ fn quality_certifies_a_gap_bound_when_the_exact_search_is_cut() {
     std::fs::create_dir_all(&instances).unwrap();
     write_instance(&instances, "big.json", &random_instance(40, 0.45, 31_000.0, 2));
     let csv = dir.join("q.csv");
-    let out = planner(&[
-        "quality",
-        "--instances",
+    let (text, rows) = run_quality(
         path_str(&instances),
-        "--deadline-ms",
-        "2",
-        "--algorithms",
-        "bbo",
-        "--exact-time-limit",
-        "0.000001",
-        "--out",
-        path_str(&csv),
-    ]);
-    assert_ok(&out);
-    let text = stdout(&out);
+        &[
+            "--deadline-ms",
+            "2",
+            "--algorithms",
+            "bbo",
+            "--exact-time-limit",
+            "0.000001",
+        ],
+        &csv,
+    );
     assert!(text.contains("0 proved, 1 not proved"), "{text}");
-    let body = std::fs::read_to_string(&csv).unwrap();
-    let row: Vec<&str> = body.lines().nth(1).unwrap().split(',').collect();
+    let row = &rows[0];
     assert_eq!(row[9], "exact_unproved");
     let (gap, bound): (f64, f64) = (row[5].parse().unwrap(), row[6].parse().unwrap());
     assert!(

@@ -477,8 +477,7 @@ impl VehicleSim {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use planner::fixtures::line_instance;
-    use planner::msg::Header;
+    use planner::fixtures::{line_instance, plan_through};
     use planner::service::network::write_snapshot;
 
     fn net() -> Box<WaypointSnapshot> {
@@ -487,17 +486,6 @@ mod tests {
         let mut s = boxed_zeroed::<WaypointSnapshot>();
         write_snapshot(&line_instance(), 0, &mut s).unwrap();
         s
-    }
-
-    fn plan(ids: &[u8], seq: u64) -> Plan {
-        let mut p = *boxed_zeroed::<Plan>();
-        p.header = Header {
-            seq,
-            ..Header::default()
-        };
-        p.route_len = ids.len() as u32;
-        p.route[..ids.len()].copy_from_slice(ids);
-        p
     }
 
     fn run_to_end(v: &mut VehicleSim) -> Vec<(f64, SimEvent)> {
@@ -515,7 +503,7 @@ mod tests {
     fn follows_the_plan_with_exact_arrival_and_task_times() {
         let mut v = VehicleSim::new();
         v.apply_snapshot(&net());
-        v.offer_plan(&plan(&[0, 1, 2, 3], 1)).unwrap();
+        v.offer_plan(&plan_through(&[0, 1, 2, 3], 1)).unwrap();
         let ev = run_to_end(&mut v);
         assert_eq!(
             ev,
@@ -556,32 +544,35 @@ mod tests {
         let mut v = VehicleSim::new();
         v.apply_snapshot(&net());
         assert_eq!(
-            v.offer_plan(&plan(&[1, 2, 3], 1)),
+            v.offer_plan(&plan_through(&[1, 2, 3], 1)),
             Err(RejectKind::BadPlan),
             "wrong start"
         );
         assert_eq!(
-            v.offer_plan(&plan(&[0, 2, 3], 2)),
+            v.offer_plan(&plan_through(&[0, 2, 3], 2)),
             Err(RejectKind::NonEdge),
             "0-2 is no edge"
         );
         assert_eq!(
-            v.offer_plan(&plan(&[0, 1, 2], 3)),
+            v.offer_plan(&plan_through(&[0, 1, 2], 3)),
             Err(RejectKind::BadPlan),
             "not at the goal"
         );
-        assert_eq!(v.offer_plan(&plan(&[0, 9, 3], 4)), Err(RejectKind::NodeOutOfRange));
-        v.offer_plan(&plan(&[0, 1, 2, 3], 5)).unwrap();
+        assert_eq!(
+            v.offer_plan(&plan_through(&[0, 9, 3], 4)),
+            Err(RejectKind::NodeOutOfRange)
+        );
+        v.offer_plan(&plan_through(&[0, 1, 2, 3], 5)).unwrap();
         assert_eq!(v.step_until(105.0), Some(SimEvent::Arrival { node: 1 }));
         assert_eq!(v.step_until(105.0), None); // working at 1 until 110
         assert_eq!(
-            v.offer_plan(&plan(&[1, 0, 3], 6)),
+            v.offer_plan(&plan_through(&[1, 0, 3], 6)),
             Err(RejectKind::VisitedNode),
             "0 visited"
         );
         // Planned from 0, which the vehicle has left: stale, not refused.
-        assert_eq!(v.offer_plan(&plan(&[0, 2, 3], 8)), Ok(PlanOffer::Stale));
-        assert_eq!(v.offer_plan(&plan(&[1, 2, 3], 7)), Ok(PlanOffer::Taken));
+        assert_eq!(v.offer_plan(&plan_through(&[0, 2, 3], 8)), Ok(PlanOffer::Stale));
+        assert_eq!(v.offer_plan(&plan_through(&[1, 2, 3], 7)), Ok(PlanOffer::Taken));
         let mut m = *boxed_zeroed::<VehicleState>();
         v.fill_state(VehicleEvent::Periodic, 1000.0, false, &mut m);
         assert_eq!(m.stale_plans, 1);
@@ -594,7 +585,7 @@ mod tests {
     fn a_moving_target_is_tracked_and_a_lost_edge_makes_it_hold() {
         let mut v = VehicleSim::new();
         v.apply_snapshot(&net());
-        v.offer_plan(&plan(&[0, 1, 2, 3], 1)).unwrap();
+        v.offer_plan(&plan_through(&[0, 1, 2, 3], 1)).unwrap();
         assert_eq!(v.step_until(50.0), None);
         // Node 1 moves 100 m further: the vehicle turns towards it.
         let mut moved = net();
@@ -618,7 +609,7 @@ mod tests {
         // The original run, stopped while travelling 1 → 2.
         let mut a = VehicleSim::new();
         a.apply_snapshot(&net());
-        a.offer_plan(&plan(&[0, 1, 2, 3], 1)).unwrap();
+        a.offer_plan(&plan_through(&[0, 1, 2, 3], 1)).unwrap();
         assert_eq!(a.step_until(1e9), Some(SimEvent::Arrival { node: 1 }));
         let (task_s, task_w) = a.current_task();
         assert_eq!(a.step_until(1e9), Some(SimEvent::TaskDone { node: 1 }));
@@ -672,9 +663,9 @@ mod tests {
         });
         assert_eq!(d.step_until(200.0), None);
         assert_eq!(d.mode(), VehicleMode::Holding);
-        d.offer_plan(&plan(&[1, 2, 3], 2)).unwrap();
+        d.offer_plan(&plan_through(&[1, 2, 3], 2)).unwrap();
         assert_eq!(
-            d.offer_plan(&plan(&[1, 0, 3], 3)),
+            d.offer_plan(&plan_through(&[1, 0, 3], 3)),
             Err(RejectKind::VisitedNode),
             "0 visited"
         );

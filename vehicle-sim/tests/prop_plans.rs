@@ -4,24 +4,11 @@
 //! waypoint already visited), or refused with a plan kind; the vehicle
 //! never panics and its travelled route stays a valid one.
 
-use planner::fixtures::random_instance;
-use planner::msg::{
-    Header, Outcome, Plan, RejectKind, VehicleEvent, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids,
-};
+use planner::fixtures::{plan_through, random_instance};
+use planner::msg::{Outcome, RejectKind, VehicleEvent, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids};
 use planner::service::network::{find_edge, write_snapshot};
 use proptest::prelude::*;
 use vehicle_sim::sim::{PlanOffer, SimEvent, VehicleSim};
-
-fn plan(ids: &[u8], seq: u64) -> Plan {
-    let mut p = *boxed_zeroed::<Plan>();
-    p.header = Header {
-        seq,
-        ..Header::default()
-    };
-    p.route_len = ids.len() as u32;
-    p.route[..ids.len()].copy_from_slice(ids);
-    p
-}
 
 fn state(v: &VehicleSim) -> VehicleState {
     let mut m = *boxed_zeroed::<VehicleState>();
@@ -59,7 +46,7 @@ proptest! {
                 route.insert(0, before.to_node as u8);
                 route.push(goal);
             }
-            match v.offer_plan(&plan(&route, k as u64 + 1)) {
+            match v.offer_plan(&plan_through(&route, k as u64 + 1)) {
                 Ok(PlanOffer::Stale) => {
                     // Only after the mission, or a plan from a waypoint the vehicle has left.
                     let left_behind = route

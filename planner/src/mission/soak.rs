@@ -72,7 +72,7 @@ pub struct SoakArgs {
 /// (states) and the planner (plans), each next to the good message it
 /// spoils (`planner mission --inject-*`, issue 4 "bad input"). The same for
 /// every mission: each kind is then rejected in every mission.
-pub fn bad_message_flags(_k: u32) -> Vec<String> {
+pub fn bad_message_flags() -> Vec<String> {
     [
         "--inject-sensor",
         "all",
@@ -126,7 +126,7 @@ fn mission_args(a: &SoakArgs, k: u32, prefix: &str) -> Result<MissionArgs, Strin
         ]);
     }
     if a.bad_messages {
-        argv.extend(bad_message_flags(k));
+        argv.extend(bad_message_flags());
     }
     MissionOnly::try_parse_from(argv)
         .map(|w| w.m)

@@ -774,6 +774,18 @@ mod tests {
         PlannerCore::new(cfg, Box::new(RandomKeySearch::new(10)))
     }
 
+    /// A core that has planned from node 0 on `inst` (snapshot epoch 0) and
+    /// published that plan.
+    fn core_with_first_plan(inst: &crate::instance::Instance) -> (PlannerCore, PlanResult) {
+        let mut c = core();
+        let mut sink = |_: &ServiceEvent| {};
+        c.on_snapshot(&snapshot(inst, 0), mono_now_ns(), &mut sink);
+        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
+        let r = c.replan().unwrap().unwrap();
+        c.published(&r, mono_now_ns(), &mut sink);
+        (c, r)
+    }
+
     #[test]
     fn first_plan_waits_for_both_inputs_then_starts_at_the_vehicle() {
         let inst = random_instance(20, 0.35, 20_000.0, 7);
@@ -836,12 +848,8 @@ mod tests {
     #[test]
     fn a_snapshot_that_removes_a_plan_edge_triggers_and_one_that_changes_nothing_does_not() {
         let inst = random_instance(20, 0.35, 20_000.0, 9);
-        let mut c = core();
+        let (mut c, r) = core_with_first_plan(&inst);
         let mut sink = |_: &ServiceEvent| {};
-        c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
-        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
-        let r = c.replan().unwrap().unwrap();
-        c.published(&r, mono_now_ns(), &mut sink);
         c.on_snapshot(&snapshot(&inst, 1), mono_now_ns(), &mut sink);
         assert!(!c.has_pending(), "an identical network must not re-plan");
         assert_eq!(c.counters().updates_without_replan, 1);
@@ -858,12 +866,8 @@ mod tests {
     #[test]
     fn a_restarted_sensor_triggers_a_replan_on_its_first_snapshot() {
         let inst = random_instance(20, 0.35, 20_000.0, 9);
-        let mut c = core();
+        let (mut c, _) = core_with_first_plan(&inst);
         let mut sink = |_: &ServiceEvent| {};
-        c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
-        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
-        let r = c.replan().unwrap().unwrap();
-        c.published(&r, mono_now_ns(), &mut sink);
         // The same network from the same sensor: nothing to do.
         c.on_snapshot(&snapshot(&inst, 1), mono_now_ns(), &mut sink);
         assert!(!c.has_pending());
@@ -902,12 +906,8 @@ mod tests {
     #[test]
     fn nothing_is_replanned_once_the_vehicle_is_at_the_goal() {
         let inst = random_instance(20, 0.35, 20_000.0, 8);
-        let mut c = core();
+        let (mut c, _) = core_with_first_plan(&inst);
         let mut sink = |_: &ServiceEvent| {};
-        c.on_snapshot(&snapshot(&inst, 0), mono_now_ns(), &mut sink);
-        c.on_state(&state(1, 0, 0, &[0], 20_000.0), mono_now_ns(), &mut sink);
-        let r = c.replan().unwrap().unwrap();
-        c.published(&r, mono_now_ns(), &mut sink);
         let goal = inst.goal as u32;
         c.on_state(&state(2, goal, 1, &[0, goal as u8], 1_000.0), mono_now_ns(), &mut sink);
         assert!(!c.has_pending(), "an arrival at the goal needs no plan");
