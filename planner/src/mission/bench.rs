@@ -350,7 +350,10 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
         loop {
             plans.drain(&mut |p: &Plan| {
                 if p.state_seq == seq {
-                    got = Some((*p, mono_now_ns()));
+                    // Stamp before copying the payload out, as the raw
+                    // ping-pong does: reading it is the consumer's work.
+                    let received = mono_now_ns();
+                    got = Some((*p, received));
                 }
             })?;
             if got.is_some() {

@@ -253,6 +253,11 @@ pub fn prepare_service_thread(rt_priority: Option<i32>, default_rt: bool) -> Res
 /// normal scheduling; a refusal is an error naming `flag`), else at
 /// `default` if any (a refusal is a warning that ends with `fallback`, and
 /// the thread stays on normal scheduling). Returns the RT priority in force.
+///
+/// Processes started from this thread afterwards begin on normal scheduling
+/// (`SCHED_RESET_ON_FORK`): an inherited RT policy turned `bench-latency
+/// --receiver-rt-priority`'s spinning children into RT spinners that the
+/// kernel's RT throttle parked for ~50 ms every second.
 pub fn request_fifo(
     flag: &str,
     requested: Option<i32>,
@@ -266,12 +271,12 @@ pub fn request_fifo(
         (None, Some(p)) => (p, false),
     };
     let param = libc::sched_param { sched_priority: prio };
-    // SAFETY: pthread_self() is this thread; `param` is a valid sched_param.
-    let rc = unsafe { libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &param) };
+    // SAFETY: pid 0 is the calling thread; `param` is a valid sched_param.
+    let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO | libc::SCHED_RESET_ON_FORK, &param) };
     if rc == 0 {
         return Ok(Some(prio));
     }
-    let why = std::io::Error::from_raw_os_error(rc);
+    let why = std::io::Error::last_os_error();
     if required {
         return Err(format!(
             "{flag} {prio}: SCHED_FIFO refused ({why}); it needs CAP_SYS_NICE or root"
@@ -372,5 +377,37 @@ mod tests {
             assert_eq!(make_solver(args.config(&world, true).unwrap().algorithm).name(), name);
         }
         assert!(Cli::try_parse_from(["x", "--algorithm", "exact"]).is_err());
+    }
+
+    /// Field 41 (`policy`) of `/proc/<pid>/stat` as the process sees itself.
+    fn policy_of_child() -> i32 {
+        let out = std::process::Command::new("cat")
+            .arg("/proc/self/stat")
+            .output()
+            .unwrap();
+        let stat = String::from_utf8(out.stdout).unwrap();
+        // Fields after the parenthesised command name start at field 3.
+        let rest = &stat[stat.rfind(')').unwrap() + 2..];
+        rest.split(' ').nth(41 - 3).unwrap().parse().unwrap()
+    }
+
+    #[test]
+    fn children_of_an_rt_thread_start_on_normal_scheduling() {
+        // A thread of its own: the policy must not leak into other tests.
+        std::thread::spawn(|| match request_fifo("--x", Some(1), None, "") {
+            Ok(Some(1)) => {
+                let mut policy = 0;
+                let mut param = libc::sched_param { sched_priority: 0 };
+                // SAFETY: this thread's id and a valid out-parameter.
+                unsafe { libc::pthread_getschedparam(libc::pthread_self(), &mut policy, &mut param) };
+                assert_eq!(policy & !libc::SCHED_RESET_ON_FORK, libc::SCHED_FIFO);
+                assert_eq!(param.sched_priority, 1);
+                assert_eq!(policy_of_child(), libc::SCHED_OTHER);
+            }
+            Err(e) if e.contains("refused") => eprintln!("note: SCHED_FIFO not permitted here: {e}"),
+            other => panic!("unexpected {other:?}"),
+        })
+        .join()
+        .unwrap();
     }
 }
