@@ -411,7 +411,9 @@ impl Drop for BusyLoops {
 fn under_overload_every_plan_is_cut_to_its_deadline_and_the_cost_is_reported() {
     let _alone = EXCLUSIVE.write().unwrap_or_else(|e| e.into_inner());
     // Both cores busy with other work; an iteration budget that no solve
-    // finishes within 20 ms; the service thread SCHED_FIFO where permitted.
+    // finishes within 20 ms (3000 did at times: about 2400 fit on a quiet
+    // host, more as the network shrinks late in the mission); the service
+    // thread SCHED_FIFO where permitted.
     let args = [
         "--enforce-deadline",
         "--deadline-ms",
@@ -421,7 +423,7 @@ fn under_overload_every_plan_is_cut_to_its_deadline_and_the_cost_is_reported() {
         "--algorithm",
         "pso",
         "--iterations",
-        "3000",
+        "30000",
         "--time-available-s",
         "6000",
     ];
@@ -439,14 +441,14 @@ fn under_overload_every_plan_is_cut_to_its_deadline_and_the_cost_is_reported() {
     assert_eq!(a["measured"], true, "{a:#}");
     assert_eq!(a["plans_cut"], plans, "every solve is cut: {r:#}");
     let mean_cut = a["mean_iterations_cut"].as_f64().unwrap();
-    assert!((1.0..3000.0).contains(&mean_cut), "{a:#}");
-    assert_eq!(a["iterations_budget"], 3000);
+    assert!((1.0..30000.0).contains(&mean_cut), "{a:#}");
+    assert_eq!(a["iterations_budget"], 30000);
     assert!(a["mean_weight_cut"].as_f64().is_some() && a["mean_weight_warm_start"].as_f64().is_some());
     if realtime {
         assert_eq!(r["deadline_misses"], 0, "{r:#}");
     }
     eprintln!(
-        "overload: {plans} plans, all cut, mean {mean_cut:.0} of 3000 iterations, weight of cut plans {} vs their warm starts {}, mission weight {}, deadline misses {} (realtime {realtime})",
+        "overload: {plans} plans, all cut, mean {mean_cut:.0} of 30000 iterations, weight of cut plans {} vs their warm starts {}, mission weight {}, deadline misses {} (realtime {realtime})",
         a["mean_weight_cut"], a["mean_weight_warm_start"], r["weight"], r["deadline_misses"]
     );
 }

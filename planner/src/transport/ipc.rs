@@ -6,7 +6,7 @@
 //!
 //! QoS, the same in every process (opening checks each value set as a
 //! minimum, so all sides must agree; one function builds them all):
-//! latest-value topics (history 1, subscriber buffer 2, safe overflow: a
+//! latest-value topics (history per [`Topic::history_size`], subscriber buffer 2, safe overflow: a
 //! slow or dead subscriber never blocks a publisher, notes §2 and §5), at most
 //! 2 publishers per topic (a restarted publisher may overlap with its dead
 //! predecessor until the dead node is cleaned), subscribers per
@@ -131,7 +131,7 @@ impl<S: Service> IpcContext<S> {
         self.node
             .service_builder(&self.service_name(&name)?)
             .publish_subscribe::<T>()
-            .history_size(1)
+            .history_size(T::TOPIC.history_size())
             .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
             .subscriber_max_borrowed_samples(1)
             .enable_safe_overflow(true)
@@ -184,7 +184,7 @@ impl<S: Service> IpcContext<S> {
     }
 
     /// A subscriber of `T`'s topic. It receives the latest sample already
-    /// published, if any (history 1).
+    /// published, if any and if the topic keeps history.
     pub fn inbox<T: OnTopic>(&self) -> Result<IpcInbox<S, T>, SetupError> {
         let service = self.pubsub::<T>()?;
         let subscriber = service

@@ -86,6 +86,19 @@ impl Topic {
         }
     }
 
+    /// Samples a subscriber that joins late is handed (iceoryx2 history).
+    /// State topics keep their latest value for a restarted peer. A plan
+    /// answers one vehicle state and is never replayed: a restarted vehicle
+    /// reports `NoPlan` and gets a fresh plan. Without history the send path
+    /// also skips the history bookkeeping (about 0.4 µs of the plan's wire
+    /// time after a solve, measured with probes in iceoryx2's `send_sample`).
+    pub fn history_size(self) -> usize {
+        match self {
+            Self::Plan => 0,
+            _ => 1,
+        }
+    }
+
     /// Subscribers the topic's service admits (consumers plus monitors and a
     /// restarted consumer overlapping with its dead predecessor).
     pub fn max_subscribers(self) -> usize {
