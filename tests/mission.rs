@@ -317,6 +317,11 @@ fn bench_latency_reports_both_distributions_as_json() {
     assert!(v["deadline_misses"].as_u64().is_some());
     assert_eq!(v["planner"]["steady_state_allocations"], 0, "{v:#}");
     assert_eq!(v["shm_leftovers"], 0);
+    // The measuring thread runs SCHED_FIFO 10 unless the host refuses it,
+    // which the bench then says.
+    let refused = String::from_utf8_lossy(&o.stderr).contains("SCHED_FIFO refused");
+    let expected = if refused { serde_json::Value::Null } else { 10.into() };
+    assert_eq!(v["receiver_rt_priority"], expected, "{v:#}");
 }
 
 #[test]

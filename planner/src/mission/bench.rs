@@ -31,7 +31,7 @@ use crate::mission::world::{ScenarioArgs, load_world};
 use crate::msg::{
     Outcome, Plan, PlannerStatus, RawPing, RawPong, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot,
 };
-use crate::service::cli::request_fifo;
+use crate::service::cli::{DEFAULT_RT_PRIORITY, request_fifo};
 use crate::service::network::write_snapshot;
 use crate::transport::clock::mono_now_ns;
 use crate::transport::ipc::{IpcContext, Shm, Stamp, retire_domain};
@@ -69,15 +69,15 @@ pub struct BenchArgs {
     /// Run the planner's service thread under SCHED_FIFO at this priority.
     #[arg(long, value_name = "PRIO")]
     pub rt_priority: Option<i32>,
-    /// Run this bench's measuring thread (the receiving end of every plan
-    /// and pong) under SCHED_FIFO at this priority (0 or absent: normal
-    /// scheduling). A trade-off, so not the default: with `--spin`, a
-    /// receiver on normal scheduling shares its core with whatever else
-    /// wakes, which shows in the wire tail; on SCHED_FIFO that tail is gone,
-    /// but the planner is then stalled now and then for ~50 ms. Measured on
-    /// the 2-core VM, 10 000 triggers, same hour: plan wire p99 13.4 µs and 0
-    /// deadline misses on normal scheduling; 4.9–5.1 µs and 78–79 misses
-    /// with `--receiver-rt-priority 10`.
+    /// SCHED_FIFO priority of this bench's measuring thread (the receiving
+    /// end of every plan and pong); 0 = normal scheduling. Default: try
+    /// priority 10 (as a real-time consumer of plans would run), falling
+    /// back to normal scheduling with a warning if refused. On normal
+    /// scheduling a spinning receiver shares its core with whatever else
+    /// wakes, which shows in the wire tail (2-core VM, 10 000 triggers, same
+    /// hour: plan wire p99 13.4 µs on normal scheduling, 4.9–5.1 µs on
+    /// SCHED_FIFO 10). The processes the bench starts do not inherit it (the
+    /// service's own policy is `--rt-priority`'s).
     #[arg(long, value_name = "PRIO")]
     pub receiver_rt_priority: Option<i32>,
     #[command(flatten)]
@@ -425,8 +425,8 @@ fn bench(a: &BenchArgs) -> Result<serde_json::Value, BenchError> {
     let receiver_rt = request_fifo(
         "--receiver-rt-priority",
         a.receiver_rt_priority,
-        None,
-        "the bench receives on normal scheduling",
+        Some(DEFAULT_RT_PRIORITY),
+        "the bench receives on normal scheduling, so other work on its core shows in the wire tail",
     )
     .map_err(BenchError::Usage)?;
     signal::install();
