@@ -219,7 +219,10 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
             }
             Err(e) => json!({"mission": k, "seed": m.scenario.seed, "error": e.to_string()}),
         };
-        rss_self.push(rss_kb_of(me).unwrap_or(0));
+        let rss_now = rss_kb_of(me).unwrap_or(0);
+        rss_self.push(rss_now);
+        let mut line = line;
+        line["supervisor_rss_kb"] = rss_now.into();
         if !a.quiet {
             println!("{line}");
         }
