@@ -315,6 +315,9 @@ fn bench_latency_reports_both_distributions_as_json() {
         assert_eq!(v[key]["count"], 40);
     }
     assert!(v["deadline_misses"].as_u64().is_some());
+    // The host's steal time is read from /proc/stat on Linux.
+    assert!(v["host_steal_ms"].as_f64().is_some_and(|ms| ms >= 0.0), "{v:#}");
+    assert!(v["deadline_misses_with_host_steal"].as_u64() <= v["deadline_misses"].as_u64());
     assert_eq!(v["planner"]["steady_state_allocations"], 0, "{v:#}");
     assert_eq!(v["shm_leftovers"], 0);
     // The measuring thread runs SCHED_FIFO 10 unless the host refuses it,

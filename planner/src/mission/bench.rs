@@ -20,6 +20,12 @@
 //! trigger *arrived* at the planner (the service's contract, issue 3); plans
 //! *received* by the trigger's sender later than the deadline after it sent
 //! the trigger are counted separately (`late_received`).
+//!
+//! On a virtual machine the host can take a CPU away for milliseconds, which
+//! nothing inside the guest can prevent. The bench reads the guest's steal
+//! time (`/proc/stat`, both CPUs) just before each trigger and just after its
+//! plan arrives, outside every timed interval, and reports the steal during
+//! the measured triggers and how many misses had some in their window.
 
 use std::process::{Child, Command, ExitCode, Stdio};
 use std::time::{Duration, Instant};
@@ -246,6 +252,28 @@ fn raw_pingpong(opts: &IpcOptions, rounds: u32, warmup: u32) -> Result<Histogram
     Ok(h)
 }
 
+/// The steal field of `/proc/stat`'s first line (`cpu  user nice system idle
+/// iowait irq softirq steal ...`): time the host ran something else while a
+/// guest CPU wanted to run, summed over CPUs, in clock ticks.
+fn parse_steal_ticks(proc_stat: &str) -> Option<u64> {
+    let line = proc_stat.lines().next()?;
+    let mut fields = line.split_ascii_whitespace();
+    (fields.next()? == "cpu").then_some(())?;
+    fields.nth(7)?.parse().ok()
+}
+
+/// Steal ticks so far (None where `/proc/stat` has none, e.g. not Linux).
+fn host_steal_ticks() -> Option<u64> {
+    parse_steal_ticks(&std::fs::read_to_string("/proc/stat").ok()?)
+}
+
+/// Milliseconds per clock tick of `/proc/stat`.
+fn ms_per_tick() -> f64 {
+    // SAFETY: sysconf has no preconditions.
+    let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) };
+    if hz > 0 { 1000.0 / hz as f64 } else { 10.0 }
+}
+
 /// Per-plan measurements of the planner run.
 struct PlannerRun {
     end_to_end: Histogram<u64>,
@@ -254,6 +282,10 @@ struct PlannerRun {
     plan_wire: Histogram<u64>,
     deadline_misses: u64,
     late_received: u64,
+    /// Steal ticks within the measured triggers' windows (None: not readable).
+    host_steal_ticks: Option<u64>,
+    /// Misses whose window saw some steal.
+    misses_with_host_steal: u64,
     deadline_cuts: u64,
     iterations: u64,
     status: Option<PlannerStatus>,
@@ -318,6 +350,8 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
         plan_wire: histogram(),
         deadline_misses: 0,
         late_received: 0,
+        host_steal_ticks: host_steal_ticks().map(|_| 0),
+        misses_with_host_steal: 0,
         deadline_cuts: 0,
         iterations: 0,
         status: None,
@@ -326,6 +360,7 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
     let start = inst.start as u8;
     let pause = Duration::from_secs_f64(a.pause_ms / 1e3);
     for k in 0..a.warmup + a.triggers {
+        let steal_before = host_steal_ticks();
         let seq = states.publish(&mut |m: &mut VehicleState| {
             m.header.mission_time_s = 0.0;
             let p = inst.nodes[inst.start];
@@ -364,6 +399,9 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
             }
             wait(&mut waker, Duration::from_millis(50))?;
         }
+        let steal = host_steal_ticks()
+            .zip(steal_before)
+            .map(|(after, before)| after.saturating_sub(before));
         if pause > Duration::ZERO {
             std::thread::sleep(pause);
         }
@@ -380,6 +418,10 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
         record(&mut run.plan_wire, received.saturating_sub(p.header.sent_mono_ns));
         run.deadline_misses += u64::from(inside > deadline_ns);
         run.late_received += u64::from(total > deadline_ns);
+        if let (Some(acc), Some(ticks)) = (&mut run.host_steal_ticks, steal) {
+            *acc += ticks;
+            run.misses_with_host_steal += u64::from(inside > deadline_ns && ticks > 0);
+        }
         run.deadline_cuts += u64::from(p.deadline_cut);
         run.iterations += u64::from(p.iterations);
     }
@@ -466,6 +508,8 @@ fn bench(a: &BenchArgs) -> Result<serde_json::Value, BenchError> {
         "raw_us": summary_us(&raw),
         "deadline_misses": run.deadline_misses,
         "late_received": run.late_received,
+        "host_steal_ms": run.host_steal_ticks.map(|t| t as f64 * ms_per_tick()),
+        "deadline_misses_with_host_steal": run.misses_with_host_steal,
         "deadline_cuts": run.deadline_cuts,
         "planner": {
             "steady_state_allocations": alloc.sys_allocs_steady,
@@ -514,6 +558,12 @@ fn print_table(v: &serde_json::Value) {
         "deadline misses {}, received late {}, cut by the deadline {}, mean iterations {:.1}",
         v["deadline_misses"], v["late_received"], v["deadline_cuts"], v["iterations_mean"]
     );
+    if let Some(ms) = v["host_steal_ms"].as_f64() {
+        println!(
+            "host steal during the measured triggers {ms:.0} ms; misses with steal in their window {}",
+            v["deadline_misses_with_host_steal"]
+        );
+    }
     println!(
         "planner steady state: {} system allocations, {} pool blocks (high water {})",
         v["planner"]["steady_state_allocations"], v["planner"]["pool_allocs_steady"], v["planner"]["pool_high_water"]
@@ -583,5 +633,20 @@ pub fn run_echo(a: &EchoArgs) -> ExitCode {
             eprintln!("planner: error: bench-echo: {e}");
             ExitCode::from(1)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steal_is_the_eighth_number_of_the_cpu_line() {
+        let stat = "cpu  4981377 49434 336106 1489454 44662 0 3981 8053 0 0\ncpu0 1 2 3 4 5 6 7 99 0 0\n";
+        assert_eq!(parse_steal_ticks(stat), Some(8053));
+        // Older kernels without the field, or another first line: unknown.
+        assert_eq!(parse_steal_ticks("cpu  1 2 3 4 5 6 7\n"), None);
+        assert_eq!(parse_steal_ticks("intr 1 2 3 4 5 6 7 8 9\n"), None);
+        assert_eq!(parse_steal_ticks(""), None);
     }
 }
