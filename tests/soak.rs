@@ -65,6 +65,8 @@ fn a_short_soak_with_faults_completes_every_mission_and_leaks_nothing() {
     ] {
         assert!(v[key].as_u64().is_some(), "{key}: {v:#}");
     }
+    // Restarted peers are connected from the planner's start-up pool.
+    assert_eq!(v["steady_state_allocations"], 0, "{v:#}");
     // Memory: every mission's children peak about the same (same-sized
     // scenarios), and this supervisor does not grow by more than a few MB.
     for p in ["planner", "sensor-sim", "vehicle-sim"] {

@@ -388,8 +388,9 @@ pub struct AllocCounters {
     pub sys_allocs_steady: u64,
     /// Frees into the system allocator by the service thread in steady state.
     pub sys_frees_steady: u64,
-    /// Small blocks served from the start-up pool in steady state (iceoryx2
-    /// 0.10 allocates 48 B per `loan`; these are those, served without the system allocator).
+    /// Blocks served from the start-up pool in steady state, without the
+    /// system allocator (iceoryx2 0.10 allocates 48 B per `loan`, and
+    /// 65–512 B blocks when it connects a restarted peer).
     pub pool_allocs_steady: u64,
     /// Most pool blocks in use at once.
     pub pool_high_water: u64,

@@ -134,7 +134,7 @@ impl Report {
                 "pool_high_water": self.alloc.pool_high_water,
                 "pool_capacity": self.alloc.pool_capacity,
                 "pool_misses": self.alloc.pool_misses,
-                "note": "pool blocks are iceoryx2 0.10's 48 B loan state, served from a pool reserved at start-up",
+                "note": "pool blocks are iceoryx2 0.10's 48 B loan state and its connections to restarted peers, served from a pool reserved at start-up",
             },
             "sensor_updates": self.sensor_updates,
             "rejected_messages": all.total(),

@@ -3,21 +3,25 @@
 //! at start-up.
 //!
 //! Why a pool: iceoryx2 0.10's `Publisher::loan_uninit` allocates one 48 B
-//! `Rc` per call (measured, see `ipc-NOTES`; 0.9.3 did not). The planner must
-//! publish without calling the system allocator in steady state, so blocks up
-//! to [`BLOCK_BYTES`] requested by the *watched* thread come from a fixed
-//! pool of [`POOL_BLOCKS`] blocks carved once by [`reserve_pool`]. Nothing is
-//! hidden: pool blocks are counted separately ([`AllocCounters`]
-//! `pool_allocs_steady`, high-water mark, misses) and published with the
-//! system-allocator counts.
+//! `Rc` per call (measured, see `ipc-NOTES`; 0.9.3 did not), and connecting a
+//! restarted peer allocates about 50 blocks of 65–512 B (measured on the
+//! service thread after vehicle restarts). The planner must run without
+//! calling the system allocator in steady state, so blocks requested by the
+//! *watched* thread come from a fixed pool carved once by [`reserve_pool`],
+//! in the size classes of [`POOL_CLASSES`]. Nothing is hidden: pool blocks
+//! are counted separately ([`AllocCounters`] `pool_allocs_steady`,
+//! high-water mark, misses) and published with the system-allocator counts.
 //!
 //! Contract:
 //! - Only the thread that called [`watch_this_thread`] is counted and pooled;
 //!   other threads (progress bar, log writer) go straight to the system
 //!   allocator, uncounted.
-//! - A pool block is returned to the pool whichever thread frees it.
-//! - Requests the pool cannot serve (too large, over-aligned, pool empty) go to
-//!   the system allocator and are counted both as system calls and as misses.
+//! - A request takes a block of the smallest class that fits and has one
+//!   free, else of a larger class.
+//! - A pool block is returned to its class whichever thread frees it.
+//! - Requests the pool cannot serve (larger than the largest class,
+//!   over-aligned, no block left) go to the system allocator and are counted
+//!   both as system calls and as misses.
 //! - [`begin_steady_state`] starts the steady-state counters (after warm-up).
 //!
 //! The state lives in one static ([`STATE`]); [`PoolAlloc`] is the zero-sized
@@ -32,14 +36,44 @@ use std::alloc::System;
 
 use crate::msg::AllocCounters;
 
-/// Size (and alignment) of a pool block: holds the 48 B iceoryx2 loan state
-/// with room to spare, at cache-line alignment.
-pub const BLOCK_BYTES: usize = 64;
+/// Alignment of every pool block (class sizes are multiples of it).
+pub const BLOCK_ALIGN: usize = 64;
 
-/// Pool blocks reserved at start-up: 64 KiB. A loan's block is freed when its
-/// sample is sent, so fewer than 10 are ever in use at once; the margin
-/// covers any other small steady-state request of the service thread.
-pub const POOL_BLOCKS: usize = 1024;
+/// Pool size classes, smallest first: (block bytes, blocks reserved); 320
+/// KiB in all. 64 B: the loan state of every publish (fewer than 10 in use
+/// at once) with margin for other small requests. 128–512 B: a restarted
+/// peer's connection (about 50 blocks each; the dead peer's are freed when
+/// its node is cleaned up), room for several restarts in flight.
+pub const POOL_CLASSES: [(usize, usize); 4] = [(64, 1024), (128, 512), (256, 512), (512, 128)];
+
+/// Most size classes a [`PoolState`] holds.
+const MAX_CLASSES: usize = POOL_CLASSES.len();
+
+/// One size class: its blocks' size, its address range inside the pool and
+/// its free list.
+struct Class {
+    bytes: AtomicUsize,
+    start: AtomicUsize,
+    end: AtomicUsize,
+    /// Head of the intrusive free list (each free block stores the next
+    /// pointer); only touched under [`PoolState`]'s lock.
+    free: UnsafeCell<*mut u8>,
+}
+
+impl Class {
+    const fn new() -> Self {
+        Self {
+            bytes: AtomicUsize::new(0),
+            start: AtomicUsize::new(0),
+            end: AtomicUsize::new(0),
+            free: UnsafeCell::new(ptr::null_mut()),
+        }
+    }
+
+    fn holds(&self, p: usize) -> bool {
+        (self.start.load(Ordering::Acquire)..self.end.load(Ordering::Acquire)).contains(&p)
+    }
+}
 
 /// Allocator state: pool, free list and counters.
 pub struct PoolState {
@@ -47,11 +81,15 @@ pub struct PoolState {
     watched: AtomicUsize,
     /// Start of the pool region (null until reserved).
     base: AtomicPtr<u8>,
+    /// Bytes of the pool region.
+    bytes: AtomicUsize,
+    /// Blocks of all classes.
     blocks: AtomicUsize,
-    /// Spin lock over `free`.
+    classes: [Class; MAX_CLASSES],
+    /// Classes in use (a prefix of `classes`).
+    class_count: AtomicUsize,
+    /// Spin lock over the classes' free lists.
     lock: AtomicBool,
-    /// Head of the intrusive free list (each free block stores the next pointer).
-    free: UnsafeCell<*mut u8>,
     steady: AtomicBool,
     /// The steady state began and ended.
     ended: AtomicBool,
@@ -64,7 +102,7 @@ pub struct PoolState {
     pool_misses: AtomicU64,
 }
 
-// SAFETY: `free` is only touched while `lock` is held; everything else is atomic.
+// SAFETY: the free lists are only touched while `lock` is held; everything else is atomic.
 unsafe impl Sync for PoolState {}
 // SAFETY: the raw pointers point into the process-wide pool, not thread-local data.
 unsafe impl Send for PoolState {}
@@ -75,9 +113,11 @@ impl PoolState {
         Self {
             watched: AtomicUsize::new(0),
             base: AtomicPtr::new(ptr::null_mut()),
+            bytes: AtomicUsize::new(0),
             blocks: AtomicUsize::new(0),
+            classes: [const { Class::new() }; MAX_CLASSES],
+            class_count: AtomicUsize::new(0),
             lock: AtomicBool::new(false),
-            free: UnsafeCell::new(ptr::null_mut()),
             steady: AtomicBool::new(false),
             ended: AtomicBool::new(false),
             sys_allocs_total: AtomicU64::new(0),
@@ -95,32 +135,56 @@ impl PoolState {
         self.watched.store(thread_token(), Ordering::SeqCst);
     }
 
-    /// Carves the pool (once; later calls do nothing). Returns whether a pool exists.
-    pub fn reserve(&self, blocks: usize) -> bool {
+    /// Carves the pool (once; later calls do nothing) in `classes` (block
+    /// bytes, blocks), smallest block first, each size a multiple of
+    /// [`BLOCK_ALIGN`]; at most [`POOL_CLASSES`]`.len()` classes. Returns
+    /// whether a pool exists.
+    pub fn reserve(&self, classes: &[(usize, usize)]) -> bool {
         if !self.base.load(Ordering::Acquire).is_null() {
             return true;
         }
-        let Ok(layout) = Layout::from_size_align(BLOCK_BYTES * blocks.max(1), BLOCK_BYTES) else {
+        let valid = !classes.is_empty()
+            && classes.len() <= MAX_CLASSES
+            && classes
+                .iter()
+                .all(|&(b, n)| b > 0 && b.is_multiple_of(BLOCK_ALIGN) && n > 0)
+            && classes.windows(2).all(|w| w[0].0 < w[1].0);
+        let total: usize = classes.iter().map(|&(b, n)| b * n).sum();
+        let Ok(layout) = Layout::from_size_align(total, BLOCK_ALIGN) else {
             return false;
         };
+        if !valid {
+            return false;
+        }
         // SAFETY: non-zero size, valid alignment.
         let base = unsafe { System.alloc(layout) };
         if base.is_null() {
             return false;
         }
         self.lock();
-        // SAFETY: lock held; the region is ours and each block is large and
-        // aligned enough to hold a pointer.
-        unsafe {
-            let mut head: *mut u8 = ptr::null_mut();
-            for i in (0..blocks.max(1)).rev() {
-                let b = base.add(i * BLOCK_BYTES);
-                (b as *mut *mut u8).write(head);
-                head = b;
+        let mut offset = 0;
+        for (class, &(bytes, blocks)) in self.classes.iter().zip(classes) {
+            // SAFETY: lock held; the region is ours, and each block lies inside
+            // it, aligned and large enough to hold a pointer.
+            unsafe {
+                let start = base.add(offset);
+                let mut head: *mut u8 = ptr::null_mut();
+                for i in (0..blocks).rev() {
+                    let b = start.add(i * bytes);
+                    (b as *mut *mut u8).write(head);
+                    head = b;
+                }
+                *class.free.get() = head;
+                class.bytes.store(bytes, Ordering::Release);
+                class.start.store(start as usize, Ordering::Release);
+                class.end.store(start as usize + bytes * blocks, Ordering::Release);
             }
-            *self.free.get() = head;
+            offset += bytes * blocks;
         }
-        self.blocks.store(blocks.max(1), Ordering::Release);
+        self.class_count.store(classes.len(), Ordering::Release);
+        self.blocks
+            .store(classes.iter().map(|&(_, n)| n).sum(), Ordering::Release);
+        self.bytes.store(total, Ordering::Release);
         self.base.store(base, Ordering::Release);
         self.unlock();
         true
@@ -176,8 +240,17 @@ impl PoolState {
             return false;
         }
         let start = base as usize;
-        let end = start + self.blocks.load(Ordering::Acquire) * BLOCK_BYTES;
-        (start..end).contains(&(p as usize))
+        (start..start + self.bytes.load(Ordering::Acquire)).contains(&(p as usize))
+    }
+
+    /// The classes in use.
+    fn classes(&self) -> &[Class] {
+        &self.classes[..self.class_count.load(Ordering::Acquire)]
+    }
+
+    /// The class of a pool block.
+    fn class_of(&self, p: *mut u8) -> Option<&Class> {
+        self.classes().iter().find(|c| c.holds(p as usize))
     }
 
     #[inline]
@@ -186,16 +259,25 @@ impl PoolState {
         w != 0 && w == thread_token()
     }
 
-    fn pool_take(&self) -> *mut u8 {
+    /// A block of at least `size` bytes: of the smallest class that fits
+    /// and has one free (null if none).
+    fn pool_take(&self, size: usize) -> *mut u8 {
         self.lock();
-        // SAFETY: lock held; every block on the list stores the next pointer.
-        let b = unsafe {
-            let head = *self.free.get();
-            if !head.is_null() {
-                *self.free.get() = (head as *mut *mut u8).read();
+        let mut b = ptr::null_mut();
+        for class in self.classes() {
+            if class.bytes.load(Ordering::Relaxed) < size {
+                continue;
             }
-            head
-        };
+            // SAFETY: lock held; every block on the list stores the next pointer.
+            unsafe {
+                let head = *class.free.get();
+                if !head.is_null() {
+                    *class.free.get() = (head as *mut *mut u8).read();
+                    b = head;
+                    break;
+                }
+            }
+        }
         self.unlock();
         if !b.is_null() {
             let n = self.pool_in_use.fetch_add(1, Ordering::Relaxed) + 1;
@@ -204,12 +286,13 @@ impl PoolState {
         b
     }
 
-    fn pool_give(&self, b: *mut u8) {
+    /// Returns block `b` of `class` to its free list.
+    fn pool_give(&self, class: &Class, b: *mut u8) {
         self.lock();
-        // SAFETY: lock held; `b` is a block of the pool no longer in use.
+        // SAFETY: lock held; `b` is a block of this class no longer in use.
         unsafe {
-            (b as *mut *mut u8).write(*self.free.get());
-            *self.free.get() = b;
+            (b as *mut *mut u8).write(*class.free.get());
+            *class.free.get() = b;
         }
         self.unlock();
         self.pool_in_use.fetch_sub(1, Ordering::Relaxed);
@@ -228,11 +311,8 @@ impl PoolState {
     /// As `GlobalAlloc::alloc`.
     pub unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if self.is_watched() {
-            if layout.size() <= BLOCK_BYTES
-                && layout.align() <= BLOCK_BYTES
-                && !self.base.load(Ordering::Relaxed).is_null()
-            {
-                let b = self.pool_take();
+            if layout.align() <= BLOCK_ALIGN && !self.base.load(Ordering::Relaxed).is_null() {
+                let b = self.pool_take(layout.size());
                 if !b.is_null() {
                     if self.steady.load(Ordering::Relaxed) {
                         self.pool_allocs_steady.fetch_add(1, Ordering::Relaxed);
@@ -254,8 +334,8 @@ impl PoolState {
     /// # Safety
     /// As `GlobalAlloc::dealloc`.
     pub unsafe fn dealloc(&self, p: *mut u8, layout: Layout) {
-        if self.in_pool(p) {
-            self.pool_give(p);
+        if let Some(class) = self.in_pool(p).then(|| self.class_of(p)).flatten() {
+            self.pool_give(class, p);
             return;
         }
         if self.is_watched() && self.steady.load(Ordering::Relaxed) {
@@ -270,8 +350,8 @@ impl PoolState {
     /// # Safety
     /// As `GlobalAlloc::realloc`.
     pub unsafe fn realloc(&self, p: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if self.in_pool(p) {
-            if new_size <= BLOCK_BYTES {
+        if let Some(class) = self.in_pool(p).then(|| self.class_of(p)).flatten() {
+            if new_size <= class.bytes.load(Ordering::Relaxed) {
                 return p;
             }
             // SAFETY: the new layout is valid (GlobalAlloc::realloc contract).
@@ -280,8 +360,8 @@ impl PoolState {
             unsafe {
                 let q = self.alloc(new_layout);
                 if !q.is_null() {
-                    ptr::copy_nonoverlapping(p, q, layout.size());
-                    self.pool_give(p);
+                    ptr::copy_nonoverlapping(p, q, layout.size().min(new_size));
+                    self.pool_give(class, p);
                 }
                 return q;
             }
@@ -356,9 +436,9 @@ pub fn watch_this_thread() {
     STATE.watch_this_thread();
 }
 
-/// Reserves the pool of [`POOL_BLOCKS`] blocks.
+/// Reserves the pool in the classes of [`POOL_CLASSES`].
 pub fn reserve_pool() -> bool {
-    STATE.reserve(POOL_BLOCKS)
+    STATE.reserve(&POOL_CLASSES)
 }
 
 /// Starts the steady-state counters.
@@ -388,7 +468,7 @@ mod tests {
     fn watched_small_blocks_come_from_the_pool_and_are_counted_separately() {
         let s = PoolState::new();
         s.watch_this_thread();
-        assert!(s.reserve(4));
+        assert!(s.reserve(&[(64, 4)]));
         s.begin_steady_state();
         unsafe {
             let a = s.alloc(l(48));
@@ -419,7 +499,7 @@ mod tests {
     fn an_exhausted_pool_falls_back_to_the_system_and_says_so() {
         let s = PoolState::new();
         s.watch_this_thread();
-        s.reserve(1);
+        s.reserve(&[(64, 1)]);
         s.begin_steady_state();
         unsafe {
             let a = s.alloc(l(16));
@@ -443,7 +523,7 @@ mod tests {
     fn other_threads_are_neither_counted_nor_pooled_but_may_free_pool_blocks() {
         let s = std::sync::Arc::new(PoolState::new());
         s.watch_this_thread();
-        s.reserve(8);
+        s.reserve(&[(64, 8)]);
         s.begin_steady_state();
         let block = unsafe { s.alloc(l(32)) } as usize;
         let s2 = s.clone();
@@ -465,7 +545,7 @@ mod tests {
     fn realloc_out_of_the_pool_keeps_the_contents() {
         let s = PoolState::new();
         s.watch_this_thread();
-        s.reserve(2);
+        s.reserve(&[(64, 2)]);
         unsafe {
             let a = s.alloc(l(8));
             a.write_bytes(7, 8);
@@ -477,5 +557,57 @@ mod tests {
             s.dealloc(big, l(200));
         }
         assert_eq!(s.pool_in_use.load(Ordering::Relaxed), 0);
+    }
+
+    #[test]
+    fn each_request_takes_the_smallest_class_with_a_free_block() {
+        let s = PoolState::new();
+        s.watch_this_thread();
+        assert!(s.reserve(&[(64, 1), (256, 1), (512, 1)]));
+        s.begin_steady_state();
+        unsafe {
+            let small = s.alloc(l(48));
+            let mid = s.alloc(l(200));
+            // 256 B is taken: the next 200 B request moves up a class.
+            let up = s.alloc(l(200));
+            let none = s.alloc(l(100));
+            let big = s.alloc(l(513));
+            assert_eq!(s.class_of(small).map(|c| c.bytes.load(Ordering::Relaxed)), Some(64));
+            assert_eq!(s.class_of(mid).map(|c| c.bytes.load(Ordering::Relaxed)), Some(256));
+            assert_eq!(s.class_of(up).map(|c| c.bytes.load(Ordering::Relaxed)), Some(512));
+            assert!(!s.in_pool(none) && !s.in_pool(big));
+            // Blocks go back to their own class: the next 200 B request gets `mid` again.
+            s.dealloc(mid, l(200));
+            let again = s.alloc(l(200));
+            assert_eq!(again, mid);
+            // Growing inside its block keeps it; past it, the block moves.
+            mid.write_bytes(9, 200);
+            assert_eq!(s.realloc(mid, l(200), 256), mid);
+            s.dealloc(up, l(200));
+            let moved = s.realloc(mid, l(256), 300);
+            assert_eq!(moved, up, "the 512 B block was free again");
+            assert_eq!(*moved.add(199), 9);
+            for (p, size) in [(small, 48), (moved, 300), (none, 100), (big, 513)] {
+                s.dealloc(p, l(size));
+            }
+        }
+        let c = s.counters();
+        assert_eq!(c.pool_capacity, 3);
+        assert_eq!(c.pool_high_water, 3);
+        assert_eq!(c.pool_misses, 2);
+        assert_eq!(c.sys_allocs_steady, 2);
+        assert_eq!(s.pool_in_use.load(Ordering::Relaxed), 0);
+    }
+
+    #[test]
+    fn a_bad_class_list_reserves_nothing() {
+        for classes in [&[][..], &[(48, 4)], &[(128, 4), (64, 4)], &[(64, 0)]] {
+            let s = PoolState::new();
+            assert!(!s.reserve(classes), "{classes:?}");
+            assert_eq!(s.counters().pool_capacity, 0);
+        }
+        let s = PoolState::new();
+        assert!(s.reserve(&POOL_CLASSES));
+        assert_eq!(s.counters().pool_capacity, 2176);
     }
 }
