@@ -381,6 +381,10 @@ fn killed_and_paused_processes_are_restarted_or_detected_and_the_report_adds_up(
     let planners = f["restarts"]["planner"].as_u64().unwrap();
     assert!(planners >= 1);
     assert_eq!(r["shm_files_left"], 0);
+    // The planner ran as a child process; its status says how it was scheduled.
+    let refused = std::fs::read_to_string(out.join("planner.log")).is_ok_and(|l| l.contains("SCHED_FIFO refused"));
+    let expected = if refused { serde_json::Value::Null } else { 10.into() };
+    assert_eq!(r["rt_priority"], expected, "{r:#}");
     // Connecting the restarted vehicles allocates inside iceoryx2; the
     // planner serves that from its start-up pool, not the system allocator.
     assert_eq!(r["steady_state_allocations"], 0, "{:#}", r["allocations"]);

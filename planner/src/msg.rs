@@ -418,7 +418,7 @@ pub enum PlannerPhase {
 /// planner → anyone: counters and latency, sent after every handled input.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.PlannerStatus.v2")]
+#[type_name("auv.PlannerStatus.v3")]
 pub struct PlannerStatus {
     /// Common header; `mission_time_s` is the latest vehicle time seen.
     pub header: Header,
@@ -458,6 +458,10 @@ pub struct PlannerStatus {
     pub phase: u32,
     /// Solver iterations of the latest plan.
     pub last_iterations: u32,
+    /// SCHED_FIFO priority of the service thread (0: normal scheduling).
+    pub rt_priority: u32,
+    /// Explicit padding.
+    pub _pad: u32,
 }
 
 /// Latency bench only: a raw ping of the same size as a [`VehicleState`],
@@ -891,7 +895,7 @@ mod tests {
             );
             assert_eq!(<VehicleState as ZeroCopySend>::type_name(), "auv.VehicleState.v2");
             assert_eq!(<Plan as ZeroCopySend>::type_name(), "auv.Plan.v2");
-            assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v2");
+            assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v3");
         }
     }
 

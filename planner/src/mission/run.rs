@@ -173,6 +173,7 @@ fn service_thread(
     let ctx = IpcContext::<Shm>::new(opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
+    core.set_rt_priority(rt_priority);
     let exit = run_service(&mut core, &mut ports, events, &mut |c: &PlannerCore| {
         shared
             .mission_time_bits
@@ -475,9 +476,6 @@ struct RunOut {
     /// Peak resident set size of each child (planner, sensor, vehicle), kB
     /// (0: not measured).
     rss_kb: [u64; 3],
-    /// SCHED_FIFO priority of the service thread (None: normal scheduling,
-    /// or not known: the planner as a child process).
-    rt_priority: Option<i32>,
 }
 
 /// How to start the simulators, where to write, and the mission's budget.
@@ -634,6 +632,7 @@ fn threaded(
             rejected: service.rejected,
             alloc: alloc::counters(),
             cut: Some(c.cut),
+            rt_priority: service.rt_priority,
         },
         allocator_installed: alloc::installed(),
         last_state: service.last_state,
@@ -641,7 +640,6 @@ fn threaded(
         trace,
         faults: None,
         rss_kb: [0; 3],
-        rt_priority: service.rt_priority,
     })
 }
 
@@ -980,7 +978,6 @@ fn supervised(
         trace,
         faults: Some(report),
         rss_kb,
-        rt_priority: None,
     })
 }
 
@@ -1126,7 +1123,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         iterations_budget: cfg.iterations,
         cut: c.cut,
         rss_kb: run.rss_kb,
-        rt_priority: run.rt_priority,
+        rt_priority: run.totals.rt_priority,
     };
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();

@@ -288,7 +288,16 @@ impl Monitor {
 
     /// The planner's counters summed over its sessions.
     pub fn planner_totals(&self) -> PlannerTotals {
-        let mut t = PlannerTotals::default();
+        let mut t = PlannerTotals {
+            rt_priority: self
+                .sessions
+                .iter()
+                .map(|s| s.rt_priority)
+                .min()
+                .filter(|&p| p > 0)
+                .and_then(|p| i32::try_from(p).ok()),
+            ..PlannerTotals::default()
+        };
         for s in &self.sessions {
             t.plans += s.plans;
             t.sensor_updates += s.sensor_updates;
@@ -347,6 +356,9 @@ pub struct PlannerTotals {
     /// What the deadline cuts cost (`None`: not measured, the planner ran
     /// as a child and its status message does not carry these).
     pub cut: Option<crate::service::core::CutCounters>,
+    /// SCHED_FIFO priority every planner process ran its service thread at
+    /// (the lowest; `None` when one ran on normal scheduling or none reported).
+    pub rt_priority: Option<i32>,
 }
 
 /// What the faults of one mission came to.

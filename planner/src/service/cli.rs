@@ -295,10 +295,11 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     let plan_faults = args.service.plan_faults()?;
     drop(world);
     let opts = args.ipc.options()?;
-    prepare_service_thread(args.service.rt_priority, !args.ipc.spin && !args.lockstep)?;
+    let rt_priority = prepare_service_thread(args.service.rt_priority, !args.ipc.spin && !args.lockstep)?;
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, &rules, plan_faults)?;
     let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
+    core.set_rt_priority(rt_priority);
     let exit = with_log_writer(args.log.as_deref(), |events: &mut dyn FnMut(&ServiceEvent)| {
         run_service(&mut core, &mut ports, events, &mut |_| true)
     })

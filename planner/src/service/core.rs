@@ -292,6 +292,8 @@ pub struct PlannerCore {
     finished: bool,
     warm: Route,
     last_state: Box<VehicleState>,
+    /// SCHED_FIFO priority the service thread runs at (0: normal scheduling).
+    rt_priority: u32,
 }
 
 /// Largest latency the histogram resolves, µs (one minute: anything above is a miss anyway).
@@ -319,7 +321,14 @@ impl PlannerCore {
             finished: false,
             warm: Route::new(),
             last_state: boxed_zeroed(),
+            rt_priority: 0,
         }
+    }
+
+    /// Records the scheduling the service thread runs under (the SCHED_FIFO
+    /// priority in force, if any), for the status message.
+    pub fn set_rt_priority(&mut self, rt_priority: Option<i32>) {
+        self.rt_priority = rt_priority.and_then(|p| u32::try_from(p).ok()).unwrap_or(0);
     }
 
     /// The settings.
@@ -683,6 +692,7 @@ impl PlannerCore {
         m.rejected = rejected.0;
         m.iterations_total = c.iterations_total;
         m.last_iterations = c.last_iterations;
+        m.rt_priority = self.rt_priority;
         m.phase = if self.finished {
             PlannerPhase::Finished
         } else if self.plan.is_some() {
