@@ -18,7 +18,12 @@
 //!   allocator, uncounted.
 //! - A request takes a block of the smallest class that fits and has one
 //!   free, else of a larger class.
-//! - A pool block is returned to its class whichever thread frees it.
+//! - A pool block is returned to its class whichever thread frees it. No
+//!   locks: the watched thread (SCHED_FIFO in the service) must never spin
+//!   on a lock held by a preempted thread of lower priority. Its own frees go
+//!   to its class's free list; other threads push theirs onto the class's
+//!   lock-free remote list, which the watched thread takes over whole when
+//!   its own list runs dry.
 //! - Requests the pool cannot serve (larger than the largest class,
 //!   over-aligned, no block left) go to the system allocator and are counted
 //!   both as system calls and as misses.
@@ -50,14 +55,17 @@ pub const POOL_CLASSES: [(usize, usize); 4] = [(64, 1024), (128, 512), (256, 512
 const MAX_CLASSES: usize = POOL_CLASSES.len();
 
 /// One size class: its blocks' size, its address range inside the pool and
-/// its free list.
+/// its free lists (intrusive: each free block stores the next pointer).
 struct Class {
     bytes: AtomicUsize,
     start: AtomicUsize,
     end: AtomicUsize,
-    /// Head of the intrusive free list (each free block stores the next
-    /// pointer); only touched under [`PoolState`]'s lock.
+    /// Blocks freed by the watched thread (or never used); only the watched
+    /// thread touches it.
     free: UnsafeCell<*mut u8>,
+    /// Blocks freed by other threads: pushed with compare-and-swap, taken
+    /// whole (a swap to null) by the watched thread, so no ABA.
+    remote: AtomicPtr<u8>,
 }
 
 impl Class {
@@ -67,6 +75,7 @@ impl Class {
             start: AtomicUsize::new(0),
             end: AtomicUsize::new(0),
             free: UnsafeCell::new(ptr::null_mut()),
+            remote: AtomicPtr::new(ptr::null_mut()),
         }
     }
 
@@ -88,8 +97,6 @@ pub struct PoolState {
     classes: [Class; MAX_CLASSES],
     /// Classes in use (a prefix of `classes`).
     class_count: AtomicUsize,
-    /// Spin lock over the classes' free lists.
-    lock: AtomicBool,
     steady: AtomicBool,
     /// The steady state began and ended.
     ended: AtomicBool,
@@ -102,7 +109,8 @@ pub struct PoolState {
     pool_misses: AtomicU64,
 }
 
-// SAFETY: the free lists are only touched while `lock` is held; everything else is atomic.
+// SAFETY: each class's `free` list is only touched by the watched thread (and
+// by `reserve` before anything is handed out); everything else is atomic.
 unsafe impl Sync for PoolState {}
 // SAFETY: the raw pointers point into the process-wide pool, not thread-local data.
 unsafe impl Send for PoolState {}
@@ -117,7 +125,6 @@ impl PoolState {
             blocks: AtomicUsize::new(0),
             classes: [const { Class::new() }; MAX_CLASSES],
             class_count: AtomicUsize::new(0),
-            lock: AtomicBool::new(false),
             steady: AtomicBool::new(false),
             ended: AtomicBool::new(false),
             sys_allocs_total: AtomicU64::new(0),
@@ -161,11 +168,11 @@ impl PoolState {
         if base.is_null() {
             return false;
         }
-        self.lock();
         let mut offset = 0;
         for (class, &(bytes, blocks)) in self.classes.iter().zip(classes) {
-            // SAFETY: lock held; the region is ours, and each block lies inside
-            // it, aligned and large enough to hold a pointer.
+            // SAFETY: nothing is handed out before `base` is published below;
+            // the region is ours, and each block lies inside it, aligned and
+            // large enough to hold a pointer.
             unsafe {
                 let start = base.add(offset);
                 let mut head: *mut u8 = ptr::null_mut();
@@ -186,7 +193,6 @@ impl PoolState {
             .store(classes.iter().map(|&(_, n)| n).sum(), Ordering::Release);
         self.bytes.store(total, Ordering::Release);
         self.base.store(base, Ordering::Release);
-        self.unlock();
         true
     }
 
@@ -218,22 +224,6 @@ impl PoolState {
     }
 
     #[inline]
-    fn lock(&self) {
-        while self
-            .lock
-            .compare_exchange_weak(false, true, Ordering::Acquire, Ordering::Relaxed)
-            .is_err()
-        {
-            core::hint::spin_loop();
-        }
-    }
-
-    #[inline]
-    fn unlock(&self) {
-        self.lock.store(false, Ordering::Release);
-    }
-
-    #[inline]
     fn in_pool(&self, p: *mut u8) -> bool {
         let base = self.base.load(Ordering::Acquire);
         if base.is_null() {
@@ -260,17 +250,21 @@ impl PoolState {
     }
 
     /// A block of at least `size` bytes: of the smallest class that fits
-    /// and has one free (null if none).
+    /// and has one free (null if none). Watched thread only.
     fn pool_take(&self, size: usize) -> *mut u8 {
-        self.lock();
         let mut b = ptr::null_mut();
         for class in self.classes() {
             if class.bytes.load(Ordering::Relaxed) < size {
                 continue;
             }
-            // SAFETY: lock held; every block on the list stores the next pointer.
+            // SAFETY: only the watched thread touches `free`; every block on
+            // either list stores the next pointer (the remote list's pushes
+            // are published by the Release of their CAS, taken by this Acquire).
             unsafe {
-                let head = *class.free.get();
+                let mut head = *class.free.get();
+                if head.is_null() {
+                    head = class.remote.swap(ptr::null_mut(), Ordering::Acquire);
+                }
                 if !head.is_null() {
                     *class.free.get() = (head as *mut *mut u8).read();
                     b = head;
@@ -278,7 +272,6 @@ impl PoolState {
                 }
             }
         }
-        self.unlock();
         if !b.is_null() {
             let n = self.pool_in_use.fetch_add(1, Ordering::Relaxed) + 1;
             self.pool_high_water.fetch_max(n, Ordering::Relaxed);
@@ -286,15 +279,30 @@ impl PoolState {
         b
     }
 
-    /// Returns block `b` of `class` to its free list.
+    /// Returns block `b` of `class`: onto its own list from the watched
+    /// thread, onto the remote list from any other.
     fn pool_give(&self, class: &Class, b: *mut u8) {
-        self.lock();
-        // SAFETY: lock held; `b` is a block of this class no longer in use.
-        unsafe {
-            (b as *mut *mut u8).write(*class.free.get());
-            *class.free.get() = b;
+        if self.is_watched() {
+            // SAFETY: only the watched thread touches `free`; `b` is a block
+            // of this class no longer in use.
+            unsafe {
+                (b as *mut *mut u8).write(*class.free.get());
+                *class.free.get() = b;
+            }
+        } else {
+            let mut head = class.remote.load(Ordering::Relaxed);
+            loop {
+                // SAFETY: `b` is a block of this class no longer in use, ours to write.
+                unsafe { (b as *mut *mut u8).write(head) };
+                match class
+                    .remote
+                    .compare_exchange_weak(head, b, Ordering::Release, Ordering::Relaxed)
+                {
+                    Ok(_) => break,
+                    Err(now) => head = now,
+                }
+            }
         }
-        self.unlock();
         self.pool_in_use.fetch_sub(1, Ordering::Relaxed);
     }
 
@@ -523,7 +531,7 @@ mod tests {
     fn other_threads_are_neither_counted_nor_pooled_but_may_free_pool_blocks() {
         let s = std::sync::Arc::new(PoolState::new());
         s.watch_this_thread();
-        s.reserve(&[(64, 8)]);
+        s.reserve(&[(64, 1)]);
         s.begin_steady_state();
         let block = unsafe { s.alloc(l(32)) } as usize;
         let s2 = s.clone();
@@ -535,10 +543,44 @@ mod tests {
         })
         .join()
         .unwrap();
+        // The block freed by the other thread serves the watched one again.
+        let again = unsafe { s.alloc(l(32)) };
+        assert_eq!(again as usize, block);
+        unsafe { s.dealloc(again, l(32)) };
         let c = s.counters();
         assert_eq!(c.sys_allocs_steady, 0);
-        assert_eq!(c.pool_allocs_steady, 1);
+        assert_eq!(c.pool_allocs_steady, 2);
+        assert_eq!(c.pool_misses, 0);
         assert_eq!(s.pool_in_use.load(Ordering::Relaxed), 0);
+    }
+
+    #[test]
+    fn blocks_freed_by_many_threads_at_once_all_come_back() {
+        const BLOCKS: usize = 64;
+        let s = std::sync::Arc::new(PoolState::new());
+        s.watch_this_thread();
+        s.reserve(&[(64, BLOCKS)]);
+        for _round in 0..20 {
+            let blocks: Vec<usize> = (0..BLOCKS).map(|_| unsafe { s.alloc(l(64)) } as usize).collect();
+            assert!(blocks.iter().all(|&b| s.in_pool(b as *mut u8)));
+            let handles: Vec<_> = blocks
+                .chunks(BLOCKS / 4)
+                .map(|chunk| {
+                    let (s, chunk) = (s.clone(), chunk.to_vec());
+                    std::thread::spawn(move || {
+                        for b in chunk {
+                            unsafe { s.dealloc(b as *mut u8, l(64)) };
+                        }
+                    })
+                })
+                .collect();
+            for h in handles {
+                h.join().unwrap();
+            }
+            assert_eq!(s.pool_in_use.load(Ordering::Relaxed), 0);
+        }
+        assert_eq!(s.counters().pool_high_water, BLOCKS as u64);
+        assert_eq!(s.counters().sys_allocs_total, 0, "every round was served by the pool");
     }
 
     #[test]
