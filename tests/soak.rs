@@ -81,6 +81,9 @@ fn a_short_soak_with_faults_completes_every_mission_and_leaks_nothing() {
         s["end"].as_u64().unwrap() <= s["after_first"].as_u64().unwrap() + 8 * 1024,
         "{v:#}"
     );
+    // The host's steal time, over the soak and per mission (Linux).
+    assert!(v["host_steal_ms"].as_f64().is_some_and(|ms| ms >= 0.0), "{v:#}");
+    assert!(v["per_mission"][2]["host_steal_ms"].as_f64().is_some(), "{v:#}");
     // The supervisor's size after each mission, for spotting growth.
     assert_eq!(v["per_mission"][0]["supervisor_rss_kb"], s["after_first"], "{v:#}");
     assert_eq!(v["per_mission"][2]["supervisor_rss_kb"], s["end"], "{v:#}");

@@ -23,6 +23,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use serde_json::{Value, json};
 
+use super::host::{host_steal_ticks, ms_per_tick};
 use super::run::{MissionArgs, mission, rss_kb_of};
 use crate::msg::{Outcome, REJECT_KINDS, RejectKind};
 use crate::rng::derive_seed;
@@ -165,6 +166,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
     let mut rejected = [0u64; REJECT_KINDS];
     let mut rss_children: Vec<[u64; 3]> = Vec::new();
     let mut rss_self = Vec::new();
+    let mut steal_total_ms = host_steal_ticks().map(|_| 0.0);
     for k in 0..a.missions {
         if signal::shutdown_requested() {
             break;
@@ -172,6 +174,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         let prefix = format!("{base}{k}_");
         let m = mission_args(a, k, &prefix)?;
         let t0 = std::time::Instant::now();
+        let steal_before = host_steal_ticks();
         let line = match mission(&m) {
             Ok((r, _)) => {
                 let ok = matches!(r.outcome, Outcome::GoalReached | Outcome::TimedOut);
@@ -223,6 +226,13 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         rss_self.push(rss_now);
         let mut line = line;
         line["supervisor_rss_kb"] = rss_now.into();
+        // The host's steal time over the mission (both CPUs): set next to
+        // its deadline misses, it tells a host stall from one of ours.
+        let steal_ms = host_steal_ticks()
+            .zip(steal_before)
+            .map(|(after, before)| after.saturating_sub(before) as f64 * ms_per_tick());
+        line["host_steal_ms"] = steal_ms.into();
+        steal_total_ms = steal_total_ms.zip(steal_ms).map(|(t, m)| t + m);
         if !a.quiet {
             println!("{line}");
         }
@@ -257,6 +267,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         "rejected_messages_by_kind": by_kind,
         "bad_messages": a.bad_messages,
         "stale_plans": stale_plans,
+        "host_steal_ms": steal_total_ms,
         "deadline_misses": deadline_misses,
         "steady_state_allocations": steady_allocs,
         "rss_kb": {
