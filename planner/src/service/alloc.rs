@@ -156,13 +156,13 @@ impl PoolState {
                 .iter()
                 .all(|&(b, n)| b > 0 && b.is_multiple_of(BLOCK_ALIGN) && n > 0)
             && classes.windows(2).all(|w| w[0].0 < w[1].0);
+        if !valid {
+            return false;
+        }
         let total: usize = classes.iter().map(|&(b, n)| b * n).sum();
         let Ok(layout) = Layout::from_size_align(total, BLOCK_ALIGN) else {
             return false;
         };
-        if !valid {
-            return false;
-        }
         // SAFETY: non-zero size, valid alignment.
         let base = unsafe { System.alloc(layout) };
         if base.is_null() {
@@ -238,8 +238,11 @@ impl PoolState {
         &self.classes[..self.class_count.load(Ordering::Acquire)]
     }
 
-    /// The class of a pool block.
+    /// The class of a pool block (None for memory outside the pool).
     fn class_of(&self, p: *mut u8) -> Option<&Class> {
+        if !self.in_pool(p) {
+            return None;
+        }
         self.classes().iter().find(|c| c.holds(p as usize))
     }
 
@@ -342,7 +345,7 @@ impl PoolState {
     /// # Safety
     /// As `GlobalAlloc::dealloc`.
     pub unsafe fn dealloc(&self, p: *mut u8, layout: Layout) {
-        if let Some(class) = self.in_pool(p).then(|| self.class_of(p)).flatten() {
+        if let Some(class) = self.class_of(p) {
             self.pool_give(class, p);
             return;
         }
@@ -358,7 +361,7 @@ impl PoolState {
     /// # Safety
     /// As `GlobalAlloc::realloc`.
     pub unsafe fn realloc(&self, p: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if let Some(class) = self.in_pool(p).then(|| self.class_of(p)).flatten() {
+        if let Some(class) = self.class_of(p) {
             if new_size <= class.bytes.load(Ordering::Relaxed) {
                 return p;
             }

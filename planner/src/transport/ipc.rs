@@ -6,8 +6,9 @@
 //!
 //! QoS, the same in every process (opening checks each value set as a
 //! minimum, so all sides must agree; one function builds them all):
-//! latest-value topics (history per [`Topic::history_size`], subscriber buffer 2, safe overflow: a
-//! slow or dead subscriber never blocks a publisher, notes §2 and §5), at most
+//! latest-value topics (history per [`Topic::history_size`], subscriber
+//! buffer 2, safe overflow: a slow or dead subscriber never blocks a
+//! publisher, notes §2 and §5), at most
 //! 2 publishers per topic (a restarted publisher may overlap with its dead
 //! predecessor until the dead node is cleaned), subscribers per
 //! [`Topic::max_subscribers`]. Nodes are created with iceoryx2's signal
