@@ -21,16 +21,16 @@
 //! the other processes still shows).
 use std::hint::black_box;
 
+use auv_core::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN};
+use auv_core::problem::{MAX_NODES, Problem};
+use auv_core::rng::PlannerRng;
+use auv_core::route::Route;
+use auv_core::solver::bbo::{Bbo, BboSettings};
+use auv_core::solver::pso::{Pso, PsoSettings};
+use auv_core::solver::{Budget, Solver, run};
+use auv_world::scenario::{ScenarioConfig, World, load_map};
 use criterion::measurement::{Measurement, ValueFormatter};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use planner::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN};
-use planner::problem::{MAX_NODES, Problem};
-use planner::rng::PlannerRng;
-use planner::route::Route;
-use planner::scenario::{ScenarioConfig, World, load_map};
-use planner::solver::bbo::{Bbo, BboSettings};
-use planner::solver::pso::{Pso, PsoSettings};
-use planner::solver::{Budget, Solver, run};
 
 const SIZES: [usize; 3] = [40, 80, 128];
 const NETWORKS: usize = 8;
@@ -120,23 +120,9 @@ struct ThreadCpuTime;
 
 #[cfg(target_os = "linux")]
 mod cpu_clock {
-    #[repr(C)]
-    struct Timespec {
-        tv_sec: i64,
-        tv_nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
-    }
-    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-
     /// Nanoseconds of CPU time this thread has used.
     pub fn now_ns() -> u64 {
-        let mut t = Timespec { tv_sec: 0, tv_nsec: 0 };
-        // SAFETY: `t` is a valid, writable timespec; the call only fills it.
-        let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) };
-        assert_eq!(rc, 0, "clock_gettime(CLOCK_THREAD_CPUTIME_ID) failed");
-        t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
+        (auv_platform::clock::thread_cpu_time_s() * 1e9) as u64
     }
 }
 

@@ -283,7 +283,7 @@ fn a_process_of_another_scenario_is_refused_with_a_clear_error() {
     assert_eq!(po.status.code(), Some(130));
     assert_eq!(so.status.code(), Some(130));
     // No process of the domain is alive: retire it, then nothing may remain.
-    planner::transport::ipc::retire_domain(&p).unwrap();
+    auv_transport::ipc::retire_domain(&p).unwrap();
     assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
 }
 

@@ -1,27 +1,15 @@
-//! Real-time task-assign route planner for autonomous underwater vehicles.
+//! The apps layer of the AUV route planner: the mission supervisor and its
+//! report, log and plot (`mission`), the planner service process (`serve`),
+//! the latency bench and the soak, and the study tools (`montecarlo`, `plot`).
 //!
-//! The data path reads top to bottom, nothing reaching back up:
-//! [`chart`] → [`scenario`] (the world) → snapshot ([`instance::Instance`]) →
-//! [`problem::Problem`] → [`solver`] → [`route::Route`] → message.
+//! The layers below, each a crate of its own, nothing reaching back up:
+//! `auv_platform` → `auv_core` → `auv_world` → `auv_messages` →
+//! `auv_transport` → `auv_service` → this crate. The data path reads top to
+//! bottom: chart → scenario (the world) → snapshot (instance) → problem →
+//! solver → route → message.
 #![warn(missing_docs)]
 
-pub mod alloc_counter;
-pub mod chart;
-pub mod decode;
-pub mod fixtures;
-pub mod instance;
 pub mod mission;
 pub mod montecarlo;
-pub mod msg;
-pub mod oplib;
 pub mod plot;
-pub mod problem;
-pub mod rng;
-pub mod route;
-pub mod scenario;
-pub mod service;
-pub mod solution;
-pub mod solver;
-pub mod transport;
-pub mod truncnorm;
-pub mod wire;
+pub mod serve;

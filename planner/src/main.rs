@@ -13,10 +13,10 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 /// Counts the service thread's calls into the system allocator and serves
-/// its small blocks from a start-up pool (`planner::service::alloc`): the
+/// its small blocks from a start-up pool (`auv_service::alloc`): the
 /// proof that the re-planning loop is allocation-free in steady state.
 #[global_allocator]
-static ALLOC: planner::service::alloc::PoolAlloc = planner::service::alloc::PoolAlloc;
+static ALLOC: auv_service::alloc::PoolAlloc = auv_service::alloc::PoolAlloc;
 
 /// Real-time task-assign route planner for AUVs (PSO and BBO on a
 /// priority-vector encoding).
@@ -45,7 +45,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    planner::service::alloc::mark_installed();
+    auv_service::alloc::mark_installed();
     let parsed = Cli::parse();
     let result = match parsed.command {
         // These report their own errors in the same one-line form and keep

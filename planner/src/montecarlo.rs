@@ -10,18 +10,19 @@
 //! `derive_seed(seed, run · 64 + algorithm index)`, reported per row. Same
 //! settings and seed → identical records except the CPU times.
 
+use auv_platform::clock::thread_cpu_time_s;
 use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use crate::chart::WaterMap;
-use crate::instance::Objective;
 use crate::plot::{self, BoundMarker, MapFigure, Panel, PlotError, RouteLayer, Series};
-use crate::problem::{NodeSet, Problem, ProblemError};
-use crate::rng::{PlannerRng, derive_seed};
-use crate::route::{Route, RouteEval};
-use crate::scenario::World;
-use crate::solver::{Budget, Solver};
+use auv_core::instance::Objective;
+use auv_core::problem::{NodeSet, Problem, ProblemError};
+use auv_core::rng::{PlannerRng, derive_seed};
+use auv_core::route::{Route, RouteEval};
+use auv_core::solver::{Budget, Solver};
+use auv_world::chart::WaterMap;
+use auv_world::scenario::World;
 
 /// φ1 of the paper's cost when the scenario's objective does not give one:
 /// 1e-3 per second of unused (or exceeded) time. Our choice: the paper's
@@ -118,18 +119,6 @@ pub fn cost_weights(objective: Objective) -> (f64, f64) {
     }
 }
 
-/// CPU time consumed by the calling thread, s.
-pub fn thread_cpu_time_s() -> f64 {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: clock_gettime writes into the timespec we own; the clock id is
-    // a constant Linux supports.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    if rc != 0 {
-        return 0.0;
-    }
-    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
-}
-
 /// The network of run `run` (1-based): the base world with the dynamic
 /// waypoints redrawn by the run's generator.
 pub fn world_of_run(base: &World, run: usize, map: &impl WaterMap) -> World {
@@ -188,7 +177,7 @@ pub fn run_study<M: WaterMap + Sync>(
                                     let seed = derive_seed(settings.seed, run as u64 * 64 + ai as u64);
                                     let mut rng = PlannerRng::new(seed);
                                     let t0 = thread_cpu_time_s();
-                                    crate::solver::run(
+                                    auv_core::solver::run(
                                         solver.as_mut(),
                                         &problem,
                                         &mut rng,
@@ -504,14 +493,14 @@ pub fn write_outputs(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::ScenarioConfig;
-    use crate::scenario::synthetic::GridMap;
+    use auv_world::scenario::ScenarioConfig;
+    use auv_world::scenario::synthetic::GridMap;
 
     /// A stand-in solver for the study's own tests: decodes one random
     /// vector per step and keeps the best (the real solvers have their own
     /// conformance suite).
     struct RandomSearch {
-        dec: crate::decode::Decoder,
+        dec: auv_core::decode::Decoder,
         best: Route,
         eval: RouteEval,
         prio: Vec<f64>,
@@ -548,10 +537,10 @@ mod tests {
             name,
             build: Box::new(|| {
                 Box::new(RandomSearch {
-                    dec: crate::decode::Decoder::new(),
+                    dec: auv_core::decode::Decoder::new(),
                     best: Route::new(),
                     eval: RouteEval::default(),
-                    prio: vec![0.0; crate::problem::MAX_NODES],
+                    prio: vec![0.0; auv_core::problem::MAX_NODES],
                     scratch: Route::new(),
                 })
             }),
@@ -602,7 +591,7 @@ mod tests {
             assert_eq!(r.algorithm, if i % 2 == 0 { "a" } else { "b" });
             let w = world_of_run(&world, r.run, &map);
             let inst = w.snapshot("check");
-            let stats = crate::route::RouteStats::from_instance(&inst, &r.route).unwrap();
+            let stats = auv_core::route::RouteStats::from_instance(&inst, &r.route).unwrap();
             assert_eq!(stats.weight, r.weight);
             assert_eq!(stats.feasible, r.feasible);
             assert!(r.cpu_ms >= 0.0);

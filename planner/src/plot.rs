@@ -12,7 +12,7 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::chart::WaterMap;
+use auv_world::chart::WaterMap;
 
 /// Why a figure could not be written.
 #[derive(Debug, thiserror::Error)]

@@ -8,13 +8,13 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use planner::fixtures::random_instance;
-use planner::instance::{Instance, Objective};
-use planner::oplib::BestKnown;
-use planner::solution::Solution;
+use auv_core::fixtures::random_instance;
+use auv_core::instance::{Instance, Objective};
+use auv_core::oplib::BestKnown;
+use auv_core::solution::Solution;
 use serde_json::{Value, json};
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data");
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../crates/core/tests/data");
 
 fn planner(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_planner"))
@@ -381,7 +381,7 @@ fn export_writes_the_default_scenario_snapshot_deterministically() {
     let text = std::fs::read_to_string(&a).unwrap();
     let inst = Instance::from_json(&text).unwrap();
     assert_eq!(inst.name, "benoits-cove-seed-42-t0");
-    // The documented scenario defaults (planner::scenario module table).
+    // The documented scenario defaults (auv_world::scenario module table).
     assert_eq!(inst.nodes.len(), 40);
     assert_eq!((inst.start, inst.goal), (0, 39));
     assert_eq!((inst.speed_mps, inst.time_available_s), (1.5, 31_000.0));

@@ -11,7 +11,7 @@
 //!
 //! Tests: `--inject KIND[,KIND…]` also sends, from epoch 1 on, one bad
 //! snapshot per update next to the good one (kinds in turn; see
-//! [`planner::wire`]): payload faults just before it, sequence faults just
+//! [`auv_messages::wire`]): payload faults just before it, sequence faults just
 //! after it, so receivers still get every good update.
 //!
 //! Input: vehicle states, validated and checked against the network size;
@@ -24,15 +24,18 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Duration;
 
+use auv_messages::msg::{Outcome, VehicleState, WaypointSnapshot};
+use auv_messages::network::write_snapshot;
+use auv_messages::wire::{
+    Fault, FaultCycle, FaultListError, SENSOR_FAULTS, WireRules, corrupt_snapshot, tamper_header,
+};
+use auv_platform::clock::mono_now_ns;
+use auv_platform::signal;
+use auv_transport::guard::Guarded;
+use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
+use auv_transport::{IpcArgs, Outbox, Role, Wake, Waker};
+use auv_world::load::{MissionWorld, ScenarioArgs, load_world};
 use clap::Parser;
-use planner::mission::world::{MissionWorld, ScenarioArgs, load_world};
-use planner::msg::{Outcome, VehicleState, WaypointSnapshot};
-use planner::service::network::write_snapshot;
-use planner::transport::clock::mono_now_ns;
-use planner::transport::guard::Guarded;
-use planner::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
-use planner::transport::{IpcArgs, Outbox, Role, Wake, Waker, signal};
-use planner::wire::{Fault, FaultCycle, FaultListError, SENSOR_FAULTS, WireRules, corrupt_snapshot, tamper_header};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -63,13 +66,13 @@ struct Args {
 #[derive(Debug, thiserror::Error)]
 enum Error {
     #[error(transparent)]
-    Setup(#[from] planner::transport::SetupError),
+    Setup(#[from] auv_transport::SetupError),
     #[error(transparent)]
-    World(#[from] planner::mission::world::WorldError),
+    World(#[from] auv_world::load::WorldError),
     #[error("transport: {0}")]
-    Transport(#[from] planner::transport::TransportError),
+    Transport(#[from] auv_transport::TransportError),
     #[error(transparent)]
-    Snapshot(#[from] planner::service::network::SnapshotError),
+    Snapshot(#[from] auv_messages::network::SnapshotError),
     #[error("--sensor-period-s {0}: must be > 0")]
     BadPeriod(f64),
     #[error("--resume-wait-s {0}: must be between 0 and 3600")]
@@ -229,7 +232,7 @@ fn serve(
                 sent_mono_ns: s.header.sent_mono_ns,
                 time_scale: s.time_scale,
             });
-            if let Some(o) = planner::msg::FromCode::from_code(s.outcome) {
+            if let Some(o) = auv_messages::msg::FromCode::from_code(s.outcome) {
                 outcome = o;
             }
         })?;

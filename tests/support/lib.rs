@@ -66,7 +66,7 @@ pub fn binary(name: &str) -> PathBuf {
 /// A fresh iceoryx2 isolation prefix for one test (short: socket paths are
 /// limited to 108 bytes).
 pub fn prefix(tag: &str) -> String {
-    planner::transport::unique_prefix(tag)
+    auv_transport::unique_prefix(tag)
 }
 
 /// A fresh empty folder under the target directory.
@@ -120,7 +120,7 @@ pub fn read_json(path: &Path) -> serde_json::Value {
 
 /// Files of the iceoryx2 domain `prefix` still on the machine.
 pub fn leftovers(prefix: &str) -> Vec<PathBuf> {
-    planner::transport::ipc::leftover_files(prefix)
+    auv_transport::ipc::leftover_files(prefix)
 }
 
 /// (tasks, weight, route) as the vehicle's journal states them, read line by

@@ -13,7 +13,7 @@
 //! by kind in every state message (`rejected`) and logged rate-limited.
 //!
 //! Tests: `--inject KIND[,KIND…]` also sends one bad state next to each good
-//! one after the first (kinds in turn; see [`planner::wire`]).
+//! one after the first (kinds in turn; see [`auv_messages::wire`]).
 //!
 //! Exit status: 0 when the mission ended (goal or time out), 1 on an error,
 //! 2 on bad arguments, 130 when stopped by a signal.
@@ -22,15 +22,16 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use auv_messages::journal::{Journal, JournalEvent, JournalSummary, Resume};
+use auv_messages::msg::{Outcome, Plan, PlannerStatus, RejectCounters, VehicleEvent, VehicleState, WaypointSnapshot};
+use auv_messages::wire::{FaultCycle, VEHICLE_FAULTS, WireRules, corrupt_state, tamper_header};
+use auv_platform::clock::mono_now_ns;
+use auv_platform::signal;
+use auv_transport::guard::Guarded;
+use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
+use auv_transport::{IpcArgs, Outbox, Role, Wake, Waker};
+use auv_world::load::{ScenarioArgs, load_world};
 use clap::Parser;
-use planner::mission::journal::{Journal, JournalEvent, JournalSummary, Resume};
-use planner::mission::world::{ScenarioArgs, load_world};
-use planner::msg::{Outcome, Plan, PlannerStatus, RejectCounters, VehicleEvent, VehicleState, WaypointSnapshot};
-use planner::transport::clock::mono_now_ns;
-use planner::transport::guard::Guarded;
-use planner::transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
-use planner::transport::{IpcArgs, Outbox, Role, Wake, Waker, signal};
-use planner::wire::{FaultCycle, VEHICLE_FAULTS, WireRules, corrupt_state, tamper_header};
 use vehicle_sim::sim::{PlanOffer, SimEvent, VehicleSim};
 
 #[derive(Parser, Debug)]
@@ -71,15 +72,15 @@ struct Args {
 #[derive(Debug, thiserror::Error)]
 enum Error {
     #[error(transparent)]
-    Setup(#[from] planner::transport::SetupError),
+    Setup(#[from] auv_transport::SetupError),
     #[error(transparent)]
-    World(#[from] planner::mission::world::WorldError),
+    World(#[from] auv_world::load::WorldError),
     #[error("transport: {0}")]
-    Transport(#[from] planner::transport::TransportError),
+    Transport(#[from] auv_transport::TransportError),
     #[error("{0}")]
     Usage(String),
     #[error(transparent)]
-    Journal(#[from] planner::mission::journal::JournalError),
+    Journal(#[from] auv_messages::journal::JournalError),
     #[error(
         "no answer within {0} s while waiting for {1} ({2}): are the planner and sensor-sim running with the same --ipc-prefix?"
     )]

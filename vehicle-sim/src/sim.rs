@@ -15,15 +15,14 @@
 //! at the same mission times give bit-identical trajectories, whatever the
 //! wall-clock pacing.
 
-use planner::instance::distance_3d_m as dist;
-use planner::mission::journal::Resume;
-use planner::msg::{
+use auv_core::instance::distance_3d_m as dist;
+use auv_core::problem::{MAX_NODES, NodeSet};
+use auv_core::route::Route;
+use auv_messages::journal::Resume;
+use auv_messages::msg::{
     Outcome, Plan, RejectKind, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids,
 };
-use planner::problem::{MAX_NODES, NodeSet};
-use planner::route::Route;
-use planner::service::core::copy_snapshot;
-use planner::service::network::find_edge;
+use auv_messages::network::{copy_snapshot, find_edge};
 
 /// What happened in a step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -477,8 +476,9 @@ impl VehicleSim {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use planner::fixtures::{line_instance, plan_through};
-    use planner::service::network::write_snapshot;
+    use auv_core::fixtures::line_instance;
+    use auv_messages::msg::plan_through;
+    use auv_messages::network::write_snapshot;
 
     fn net() -> Box<WaypointSnapshot> {
         // 0 - 1 - 2 - 3 on a line 100 m apart (+ shortcut 0 - 3), 1 m/s,

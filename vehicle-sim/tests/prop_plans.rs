@@ -4,9 +4,10 @@
 //! waypoint already visited), or refused with a plan kind; the vehicle
 //! never panics and its travelled route stays a valid one.
 
-use planner::fixtures::{plan_through, random_instance};
-use planner::msg::{Outcome, RejectKind, VehicleEvent, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids};
-use planner::service::network::{find_edge, write_snapshot};
+use auv_core::fixtures::random_instance;
+use auv_messages::msg::plan_through;
+use auv_messages::msg::{Outcome, RejectKind, VehicleEvent, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids};
+use auv_messages::network::{find_edge, write_snapshot};
 use proptest::prelude::*;
 use vehicle_sim::sim::{PlanOffer, SimEvent, VehicleSim};
 

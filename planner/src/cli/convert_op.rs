@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use planner::oplib::parse_op;
+use auv_core::oplib::parse_op;
 
 use super::{CliError, print, read_text, write_text};
 

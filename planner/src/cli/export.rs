@@ -4,15 +4,15 @@
 //! Contract: the scenario is the default one ([`ScenarioConfig::default`],
 //! the embedded Benoit's Cove chart) or the `auv-scenario/1` file given with
 //! `--scenario`; together with `--seed` it fixes the world bit for bit
-//! ([`planner::scenario::load_world`]). The snapshot is the world as
+//! ([`auv_world::scenario::load_world`]). The snapshot is the world as
 //! generated (time 0), named `<chart>-seed-<S>-t0`. The file written reads
 //! back through [`Instance::from_json`] to the same instance (checked before
 //! it is written).
 
 use std::path::{Path, PathBuf};
 
-use planner::instance::Instance;
-use planner::scenario::{ChartSource, EMBEDDED_CHART_NAME, ScenarioConfig, load_world};
+use auv_core::instance::Instance;
+use auv_world::scenario::{ChartSource, EMBEDDED_CHART_NAME, ScenarioConfig, load_world};
 
 use super::{CliError, check_json, print, read_text, write_text};
 

@@ -17,10 +17,10 @@ pub mod solve;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use planner::instance::{Instance, InstanceError};
-use planner::oplib::OpError;
-use planner::problem::ProblemError;
-use planner::scenario::{ConfigError, LoadError};
+use auv_core::instance::{Instance, InstanceError};
+use auv_core::oplib::OpError;
+use auv_core::problem::ProblemError;
+use auv_world::scenario::{ConfigError, LoadError};
 
 /// Seed used when `--seed` is not given (our choice; any fixed value would
 /// do). The output always reports the seed it used.

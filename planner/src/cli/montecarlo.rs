@@ -9,9 +9,9 @@
 
 use std::path::PathBuf;
 
+use auv_core::solver::Algorithm;
+use auv_world::scenario::{ScenarioConfig, load_world};
 use planner::montecarlo::{self, AlgorithmSpec, StudySettings};
-use planner::scenario::{ScenarioConfig, load_world};
-use planner::solver::Algorithm;
 
 use super::export::load_scenario;
 use super::{CliError, DEFAULT_SEED, print};

@@ -24,15 +24,15 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use auv_core::instance::{Instance, Objective};
+use auv_core::oplib::{BestKnown, instance_name, parse_op};
+use auv_core::problem::Problem;
+use auv_core::rng::PlannerRng;
+use auv_core::route::{Route, RouteEval};
+use auv_core::solver::exact::{ExactSettings, solve_exact};
+use auv_core::solver::{self, Algorithm, Budget, Solver};
+use auv_platform::clock::thread_cpu_time_s;
 use clap::ValueEnum;
-use planner::instance::{Instance, Objective};
-use planner::montecarlo::thread_cpu_time_s;
-use planner::oplib::{BestKnown, instance_name, parse_op};
-use planner::problem::Problem;
-use planner::rng::PlannerRng;
-use planner::route::{Route, RouteEval};
-use planner::solver::exact::{ExactSettings, solve_exact};
-use planner::solver::{self, Algorithm, Budget, Solver};
 
 use super::{CliError, DEFAULT_SEED, load_instance, print, read_text, write_text};
 

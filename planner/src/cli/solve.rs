@@ -3,12 +3,12 @@
 //! prizes alike) and print the format's solution object.
 //!
 //! Contract: the figures printed are recomputed from the instance and the
-//! route ([`planner::solution::Solution::new`]), not copied from the solver.
+//! route ([`auv_core::solution::Solution::new`]), not copied from the solver.
 //! The same instance, algorithm, seed and iteration count print the same
 //! output except `solve_ms`.
 //!
 //! `--algorithm exact` runs the branch-and-bound
-//! ([`planner::solver::exact::solve_exact`], the format's full order: best
+//! ([`auv_core::solver::exact::solve_exact`], the format's full order: best
 //! objective value, ties to the smaller route time) and, besides the
 //! format's fields, reports `proved_optimal`, `bound` (an upper bound on the
 //! weight, or a lower bound on the cost) and `gap` (|bound − value| / |value|,
@@ -19,15 +19,15 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use auv_core::problem::Problem;
+use auv_core::rng::PlannerRng;
+use auv_core::solution::{RunInfo, Solution};
+use auv_core::solver::auto::{AUTO_ITERATIONS, Auto};
+use auv_core::solver::bbo::{Bbo, BboSettings};
+use auv_core::solver::exact::{ExactSettings, solve_exact};
+use auv_core::solver::pso::{Pso, PsoSettings};
+use auv_core::solver::{self, Budget, SolveOutcome, Solver, StopReason};
 use clap::ValueEnum;
-use planner::problem::Problem;
-use planner::rng::PlannerRng;
-use planner::solution::{RunInfo, Solution};
-use planner::solver::auto::{AUTO_ITERATIONS, Auto};
-use planner::solver::bbo::{Bbo, BboSettings};
-use planner::solver::exact::{ExactSettings, solve_exact};
-use planner::solver::pso::{Pso, PsoSettings};
-use planner::solver::{self, Budget, SolveOutcome, Solver, StopReason};
 
 use super::{CliError, DEFAULT_SEED, load_instance, print};
 
@@ -176,7 +176,7 @@ struct ExactSolution<'a> {
 }
 
 /// `planner solve --algorithm exact`.
-fn run_exact(args: &Args, inst: &planner::instance::Instance, problem: &Problem) -> Result<(), CliError> {
+fn run_exact(args: &Args, inst: &auv_core::instance::Instance, problem: &Problem) -> Result<(), CliError> {
     // Check every argument before the (possibly long) search.
     let time_limit = args.time_limit.as_deref().map(parse_time_limit).transpose()?;
     if let Some(d) = args.deadline_ms {
@@ -224,8 +224,8 @@ fn run_exact(args: &Args, inst: &planner::instance::Instance, problem: &Problem)
     } else {
         let mut text = solution.summary(inst);
         let what = match inst.objective {
-            planner::instance::Objective::MaxWeight => "upper bound on the weight",
-            planner::instance::Objective::PaperCost { .. } => "lower bound on the cost",
+            auv_core::instance::Objective::MaxWeight => "upper bound on the weight",
+            auv_core::instance::Objective::PaperCost { .. } => "lower bound on the cost",
         };
         if out.proved_optimal {
             text.push_str(&format!(

@@ -33,17 +33,18 @@ use std::time::{Duration, Instant};
 use hdrhistogram::Histogram;
 use serde_json::json;
 
-use crate::mission::host::{host_steal_ticks, ms_per_tick};
-use crate::mission::world::{ScenarioArgs, load_world};
-use crate::msg::{
+use crate::serve::{DEFAULT_RT_PRIORITY, request_fifo};
+use auv_messages::msg::{
     Outcome, Plan, PlannerStatus, RawPing, RawPong, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot,
 };
-use crate::service::cli::{DEFAULT_RT_PRIORITY, request_fifo};
-use crate::service::network::write_snapshot;
-use crate::transport::clock::mono_now_ns;
-use crate::transport::ipc::{IpcContext, Shm, Stamp, retire_domain};
-use crate::transport::{Inbox, IpcArgs, IpcOptions, Outbox, Role, SetupError, TransportError, WaitMode, Wake, Waker};
-use crate::transport::{signal, unique_prefix};
+use auv_messages::network::write_snapshot;
+use auv_platform::clock::mono_now_ns;
+use auv_platform::host::{host_steal_ticks, ms_per_tick};
+use auv_platform::signal;
+use auv_transport::ipc::{IpcContext, Shm, Stamp, retire_domain};
+use auv_transport::unique_prefix;
+use auv_transport::{Inbox, IpcArgs, IpcOptions, Outbox, Role, SetupError, TransportError, WaitMode, Wake, Waker};
+use auv_world::load::{ScenarioArgs, load_world};
 
 /// `planner bench-latency` flags.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -415,7 +416,8 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
     let t0 = Instant::now();
     loop {
         status_in.drain(&mut |s: &PlannerStatus| status = Some(*s))?;
-        if status.is_some_and(|s| s.phase == crate::msg::PlannerPhase::Finished as u32) || t0.elapsed() > ANSWER_TIMEOUT
+        if status.is_some_and(|s| s.phase == auv_messages::msg::PlannerPhase::Finished as u32)
+            || t0.elapsed() > ANSWER_TIMEOUT
         {
             break;
         }
@@ -460,7 +462,7 @@ fn bench(a: &BenchArgs) -> Result<serde_json::Value, BenchError> {
         Ok::<_, BenchError>((raw, run))
     })();
     let retired = retire_domain(&prefix)?;
-    let leftovers = crate::transport::ipc::leftover_files(&prefix);
+    let leftovers = auv_transport::ipc::leftover_files(&prefix);
     let (raw, run) = result?;
     let world_desc = load_world(&a.scenario).map(|w| w.describe()).unwrap_or_default();
     let alloc = run.status.map(|s| s.alloc).unwrap_or_default();

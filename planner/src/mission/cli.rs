@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use super::bench::{BenchArgs, EchoArgs, run_bench, run_echo};
 use super::run::{MissionArgs, run_mission};
 use super::soak::{SoakArgs, run_soak};
-use crate::service::cli::{ServeArgs, run_serve};
+use crate::serve::{ServeArgs, run_serve};
 
 /// The three-process system's subcommands.
 #[derive(Clone, Debug, clap::Subcommand)]

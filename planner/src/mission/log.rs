@@ -7,8 +7,8 @@
 
 use serde_json::{Value, json};
 
-use crate::msg::{Outcome, TriggerKind};
-use crate::service::core::ServiceEvent;
+use auv_messages::msg::{TriggerKind, outcome_name};
+use auv_service::core::ServiceEvent;
 
 /// snake_case name of a trigger.
 pub fn trigger_name(k: TriggerKind) -> &'static str {
@@ -19,16 +19,6 @@ pub fn trigger_name(k: TriggerKind) -> &'static str {
         TriggerKind::TimeChanged => "time_changed",
         TriggerKind::Infeasible => "infeasible",
         TriggerKind::SensorBack => "sensor_back",
-    }
-}
-
-/// snake_case name of an outcome.
-pub fn outcome_name(o: Outcome) -> &'static str {
-    match o {
-        Outcome::Running => "running",
-        Outcome::GoalReached => "goal_reached",
-        Outcome::TimedOut => "timed_out",
-        Outcome::Aborted => "aborted",
     }
 }
 
@@ -167,7 +157,7 @@ pub fn with_log_writer<R>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::route::{Route, RouteEval};
+    use auv_core::route::{Route, RouteEval};
 
     #[test]
     fn a_plan_is_logged_as_its_trigger_then_the_plan() {
@@ -206,7 +196,7 @@ mod tests {
                 for k in 0..2000 {
                     sink(&ServiceEvent::Finished {
                         t: f64::from(k + round * 2000),
-                        outcome: Outcome::GoalReached,
+                        outcome: auv_messages::msg::Outcome::GoalReached,
                     });
                 }
             })

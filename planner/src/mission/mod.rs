@@ -2,11 +2,8 @@
 //! latency bench; and the entry points of the three-process subcommands.
 pub mod bench;
 pub mod cli;
-pub mod host;
-pub mod journal;
 pub mod log;
 pub mod report;
 pub mod run;
 pub mod soak;
 pub mod supervise;
-pub mod world;

@@ -2,7 +2,7 @@
 
 use serde_json::{Value, json};
 
-use crate::msg::{AllocCounters, Outcome, REJECT_KINDS, RejectCounters, RejectKind};
+use auv_messages::msg::{AllocCounters, Outcome, REJECT_KINDS, RejectCounters, RejectKind};
 
 /// Everything the report states.
 #[derive(Clone, Debug)]
@@ -73,7 +73,7 @@ pub struct Report {
     /// Solver iterations per plan asked for.
     pub iterations_budget: u32,
     /// What the deadline cuts cost, when measured.
-    pub cut: Option<crate::service::core::CutCounters>,
+    pub cut: Option<auv_service::core::CutCounters>,
     /// Peak resident set size of the child processes (planner, sensor-sim,
     /// vehicle-sim), kB; 0 where not measured (the planner on a thread, or
     /// lockstep without --planner-process).
@@ -99,7 +99,7 @@ impl Report {
         let all = self.all_rejected();
         json!({
             "goal_reached": self.goal_reached(),
-            "outcome": super::log::outcome_name(self.outcome),
+            "outcome": auv_messages::msg::outcome_name(self.outcome),
             "time_used_s": self.time_used_s,
             "time_available_s": self.time_available_s,
             "tasks_completed": self.tasks_completed,

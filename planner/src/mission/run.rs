@@ -23,22 +23,23 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use heapless::spsc::Queue;
 
-use super::journal::{JournalEvent, JournalSummary};
 use super::log::lines;
 use super::report::Report;
 use super::supervise::{
     FaultKind, FaultReport, LATEST_INJECTION, LivenessEvent, Monitor, PlannerTotals, Proc, plan_faults,
 };
-use super::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
-use crate::msg::{Outcome, RejectCounters, VehicleState};
 use crate::plot::{BoundMarker, MapFigure, PlotError, RouteLayer, map_figure};
-use crate::service::alloc;
-use crate::service::cli::{ServeError, ServiceArgs, make_solver, open_ports, prepare_service_thread};
-use crate::service::core::{PlannerCore, ServiceConfig, ServiceCounters, ServiceEvent};
-use crate::service::run::{ExitReason, run_service};
-use crate::transport::ipc::{IpcContext, Shm, cleanup_dead_nodes, domain_config, leftover_files, retire_domain};
-use crate::transport::{IpcOptions, SetupError, WaitMode, signal, unique_prefix};
-use crate::wire::{FaultCycle, SENSOR_FAULTS, VEHICLE_FAULTS, WireRules};
+use crate::serve::{ServeError, ServiceArgs, make_solver, open_ports, prepare_service_thread};
+use auv_messages::journal::{JournalEvent, JournalSummary};
+use auv_messages::msg::{Outcome, RejectCounters, VehicleState};
+use auv_messages::wire::{FaultCycle, SENSOR_FAULTS, VEHICLE_FAULTS, WireRules};
+use auv_platform::signal;
+use auv_service::alloc;
+use auv_service::core::{PlannerCore, ServiceConfig, ServiceCounters, ServiceEvent};
+use auv_service::run::{ExitReason, run_service};
+use auv_transport::ipc::{IpcContext, Shm, cleanup_dead_nodes, domain_config, leftover_files, retire_domain};
+use auv_transport::{IpcOptions, SetupError, WaitMode, unique_prefix};
+use auv_world::load::{MissionWorld, ScenarioArgs, WorldError, load_world};
 
 /// `planner mission` flags.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -197,9 +198,6 @@ pub fn sibling_binary(name: &str) -> Result<PathBuf, MissionError> {
     let exe = std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?;
     let dir = exe.parent().unwrap_or(Path::new("."));
     let p = dir.join(name);
-    if !p.is_file() {
-        build_sibling_under_cargo(name, dir);
-    }
     if p.is_file() {
         Ok(p)
     } else {
@@ -208,28 +206,6 @@ pub fn sibling_binary(name: &str) -> Result<PathBuf, MissionError> {
             exe.display()
         )))
     }
-}
-
-/// `cargo run -p planner` builds the planner alone, so on a fresh checkout
-/// the simulators are missing: when started by cargo (it sets `CARGO` and
-/// `CARGO_MANIFEST_DIR`), build the missing one with the same profile into
-/// the same target folder. Best effort: the caller reports what is still
-/// missing.
-fn build_sibling_under_cargo(name: &str, exe_dir: &Path) {
-    let (Some(cargo), Some(manifest_dir)) = (std::env::var_os("CARGO"), std::env::var_os("CARGO_MANIFEST_DIR")) else {
-        return;
-    };
-    let profile = match exe_dir.file_name().and_then(|d| d.to_str()) {
-        Some("debug") => "dev",
-        Some(p) => p,
-        None => return,
-    };
-    eprintln!("planner: building {name} (profile {profile}) for the mission…");
-    let _ = Command::new(cargo)
-        .current_dir(manifest_dir)
-        .args(["build", "--quiet", "--profile", profile, "-p", name])
-        .stdin(Stdio::null())
-        .status();
 }
 
 /// A child process and where its stderr goes.
@@ -1012,7 +988,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
             ServeError::Usage(u) => MissionError::Usage(u),
             other => MissionError::Serve(other),
         })?;
-    let usage = |e: crate::wire::FaultListError| MissionError::Usage(e.to_string());
+    let usage = |e: auv_messages::wire::FaultListError| MissionError::Usage(e.to_string());
     let sensor_faults =
         FaultCycle::parse_opt("--inject-sensor", a.inject_sensor.as_deref(), &SENSOR_FAULTS).map_err(usage)?;
     let vehicle_faults =
@@ -1085,7 +1061,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         _ => Outcome::Aborted,
     };
     let stale_plans = last.map_or(0, |s| s.stale_plans);
-    let rejected_vehicle = RejectCounters(last.map_or([0; crate::msg::REJECT_KINDS], |s| s.rejected));
+    let rejected_vehicle = RejectCounters(last.map_or([0; auv_messages::msg::REJECT_KINDS], |s| s.rejected));
     let c = run.totals;
     let trace = run.trace;
     let report = Report {
@@ -1131,7 +1107,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let title = format!(
         "Mission, seed {}: {}",
         a.scenario.seed,
-        super::log::outcome_name(outcome)
+        auv_messages::msg::outcome_name(outcome)
     );
     plot(&out.join("mission.svg"), &mut world, &trace, &title)?;
     Ok((report, out))

@@ -23,12 +23,13 @@ use std::process::ExitCode;
 use clap::Parser;
 use serde_json::{Value, json};
 
-use super::host::{host_steal_ticks, ms_per_tick};
 use super::run::{MissionArgs, mission, rss_kb_of};
-use crate::msg::{Outcome, REJECT_KINDS, RejectKind};
-use crate::rng::derive_seed;
-use crate::transport::ipc::leftover_files;
-use crate::transport::{signal, unique_prefix};
+use auv_core::rng::derive_seed;
+use auv_messages::msg::{Outcome, REJECT_KINDS, RejectKind};
+use auv_platform::host::{host_steal_ticks, ms_per_tick};
+use auv_platform::signal;
+use auv_transport::ipc::leftover_files;
+use auv_transport::unique_prefix;
 
 /// `planner soak` flags.
 #[derive(Clone, Debug, PartialEq, clap::Args)]

@@ -23,12 +23,12 @@ use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 
-use crate::msg::{
+use auv_core::rng::PlannerRng;
+use auv_messages::msg::{
     AllocCounters, PlannerStatus, REJECT_KINDS, RejectCounters, Validate, VehicleState, WaypointSnapshot,
 };
-use crate::rng::PlannerRng;
-use crate::transport::ipc::{IpcContext, IpcInbox, Shm};
-use crate::transport::{Inbox, IpcOptions, SetupError};
+use auv_transport::ipc::{IpcContext, IpcInbox, Shm};
+use auv_transport::{Inbox, IpcOptions, SetupError};
 
 /// A supervised process.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -188,8 +188,9 @@ impl Monitor {
         let now = Instant::now();
         let mut heard = [false; 3];
         let fp = self.fingerprint;
-        let good =
-            |h: &crate::msg::Header, valid: Result<(), crate::msg::RejectKind>| h.fingerprint == fp && valid.is_ok();
+        let good = |h: &auv_messages::msg::Header, valid: Result<(), auv_messages::msg::RejectKind>| {
+            h.fingerprint == fp && valid.is_ok()
+        };
         let mut last_state = self.last_state;
         let _ = self.states.drain(&mut |s: &VehicleState| {
             if good(&s.header, s.validate()) {
@@ -355,7 +356,7 @@ pub struct PlannerTotals {
     pub alloc: AllocCounters,
     /// What the deadline cuts cost (`None`: not measured, the planner ran
     /// as a child and its status message does not carry these).
-    pub cut: Option<crate::service::core::CutCounters>,
+    pub cut: Option<auv_service::core::CutCounters>,
     /// SCHED_FIFO priority every planner process ran its service thread at
     /// (the lowest; `None` when one ran on normal scheduling or none reported).
     pub rt_priority: Option<i32>,
