@@ -1,4 +1,4 @@
-//! Criterion benches for the planner's hot paths (issue 2 §7): decoding one
+//! Criterion benches for the planner's hot paths: decoding one
 //! priority vector, and a full paper budget of PSO (150 particles × 150
 //! iterations) and BBO (50 habitats × 150 generations), at n = 40, 80, 128.
 //!

@@ -28,7 +28,7 @@ pub struct ServiceArgs {
     /// Solver iterations per re-plan (cut at the deadline).
     #[arg(long, default_value_t = 150)]
     pub iterations: u32,
-    /// Planner: auto (memetic PSO + local search, issue 5), or the paper's pso or bbo.
+    /// Planner: auto (memetic PSO + local search), or the paper's pso or bbo.
     #[arg(long, value_name = "auto|pso|bbo", default_value_t = Algorithm::Auto)]
     pub algorithm: Algorithm,
     /// Re-plan on a sensor update when the plan's remaining time moves by more than this, s.
@@ -194,7 +194,7 @@ impl ServiceArgs {
     }
 }
 
-/// The solver the service runs: `auto` by default (issue 5), or the paper's
+/// The solver the service runs: `auto` by default, or the paper's
 /// PSO (150 particles, inertia schedule over the paper's 150 iterations) or
 /// BBO. The iteration budget per re-plan comes from the service
 /// configuration (default 150), cut at the deadline.

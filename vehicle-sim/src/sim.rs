@@ -1,7 +1,7 @@
 //! The vehicle's motion and task model, free of transport and clocks: an
 //! event-driven simulation advanced to a given mission time.
 //!
-//! Model (issue 3): the vehicle follows its plan edge by edge. On an edge it
+//! Model: the vehicle follows its plan edge by edge. On an edge it
 //! travels at constant speed in 3-D straight towards the *latest reported*
 //! position of the next waypoint (the target may move when a snapshot
 //! arrives); on reaching it (an *arrival*) it spends the edge's task time

@@ -17,7 +17,7 @@
 //! mantissa (values closer than about 1e-13 relative tie); ties go to the
 //! lower node id.
 //!
-//! How it is fast (issue 2 §7):
+//! How it is fast:
 //! - Each priority is packed once per decode into a positive `f64` *key*
 //!   whose order is the priority order and whose lowest 7 bits hold the node
 //!   id ([`pack_key`]). Choosing the next node is one branch-free max over

@@ -1,6 +1,6 @@
-//! One generic conformance suite for every anytime solver (issue 2 §4, house
-//! style §10), instantiated below for each algorithm, plus pinned
-//! regressions that keep the paper-faithful PSO and BBO reproducible.
+//! One generic conformance suite for every anytime solver (house style §10),
+//! instantiated below for each algorithm, plus pinned regressions that keep
+//! the paper-faithful PSO and BBO reproducible.
 //!
 //! Each property is a generic function over `S: Solver` taking a factory;
 //! `conformance!` turns them into one `#[test]` each per solver, so a new
@@ -325,7 +325,7 @@ fn pinned(algorithm: Algorithm) -> (Vec<usize>, RouteEval, Instance) {
     (route.to_vec(), e, inst)
 }
 
-/// The paper-faithful PSO must stay reproducible per seed (issue 5): if this
+/// The paper-faithful PSO must stay reproducible per seed: if this
 /// fails, a change altered what `--algorithm pso --seed 42` returns. Only
 /// update the pin for a deliberate change to the paper-faithful PSO, and say
 /// so in the commit.

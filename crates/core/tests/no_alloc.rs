@@ -1,5 +1,5 @@
-//! Proof that solving allocates nothing once a solver is built (issue 2 §4,
-//! house style §4): this test binary installs the counting allocator, builds
+//! Proof that solving allocates nothing once a solver is built (house style
+//! §4): this test binary installs the counting allocator, builds
 //! problems and solvers, runs one warm-up solve, and then counts the solving
 //! thread's allocations over many full-budget solves of PSO, BBO and auto — both
 //! objectives, cold and warm-started, with and without a deadline. Counts are

@@ -39,12 +39,12 @@ use auv_platform::clock::mono_now_ns;
 /// Settings of the re-planning service; [`ServiceConfig::default`] documents each default.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ServiceConfig {
-    /// Trigger sent → plan published (issue: default 20 ms).
+    /// Trigger sent → plan published (default 20 ms).
     pub deadline: Duration,
     /// Time kept free after the solver stops for building and publishing
     /// the plan (our choice: 1 ms, far above the measured publish cost).
     pub publish_margin: Duration,
-    /// Solver iterations per re-plan (issue: the PSO budget, 150).
+    /// Solver iterations per re-plan (the paper's PSO budget, 150).
     pub iterations: u32,
     /// A sensor update re-plans when the remaining plan time moves by more
     /// than this, s (our choice: 120 s, about the shortest task time).
@@ -61,7 +61,7 @@ pub struct ServiceConfig {
     pub arrival_allowance_s: [f64; MAX_NODES],
     /// Seed of the planner's random draws.
     pub seed: u64,
-    /// The solver `make_solver` builds (default `auto`, issue 5).
+    /// The solver `make_solver` builds (default `auto`).
     pub algorithm: Algorithm,
     /// Scenario fingerprint of this process.
     pub fingerprint: u64,
@@ -159,7 +159,7 @@ struct Pending {
     kind: TriggerKind,
     sent_ns: u64,
     /// When the triggering message was taken off the transport: the
-    /// deadline counts from here (issue: "from the trigger's arrival").
+    /// deadline counts from here (the deadline counts from the trigger's arrival).
     received_ns: u64,
     mission_time_s: f64,
 }
@@ -228,7 +228,7 @@ pub struct ServiceCounters {
     pub cut: CutCounters,
 }
 
-/// What cutting solves at the deadline cost (issue 4, overload): iterations
+/// What cutting solves at the deadline cost (under overload): iterations
 /// run against the budget, and the weight of the cut plans against the
 /// warm start they began from (the previous plan's remainder: what the
 /// vehicle would have followed without the re-plan).
@@ -456,7 +456,7 @@ impl PlannerCore {
     /// current plan.
     pub fn on_snapshot(&mut self, s: &WaypointSnapshot, received_ns: u64, events: &mut dyn FnMut(&ServiceEvent)) {
         // A new sender session is a restarted sensor: re-plan on what it
-        // reports even when the usual thresholds would not (issue 4).
+        // reports even when the usual thresholds would not.
         let sensor_back = self.have_snapshot && s.header.session != self.snapshot.header.session;
         copy_snapshot(s, &mut self.snapshot);
         self.have_snapshot = true;

@@ -1,5 +1,5 @@
 //! `planner quality`: solves every instance in a folder with each algorithm
-//! under each deadline and reports the gap to the optimum (issue 5 §2).
+//! under each deadline and reports the gap to the optimum.
 //!
 //! Contract: instances are every `*.json` (`auv-route-instance/1`) and
 //! every classic orienteering `*.txt` file under `--instances` (recursively,
@@ -288,7 +288,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         for &d in &deadlines {
             for (a, s) in &mut solvers {
                 let mut rng = PlannerRng::new(args.seed);
-                // Auto spends the whole deadline (issue 5 §2); PSO and BBO
+                // Auto spends the whole deadline; PSO and BBO
                 // keep the paper's budget, cut by the deadline.
                 let iterations = if *a == Algorithm::Auto {
                     u32::MAX

@@ -22,11 +22,8 @@ use std::time::{Duration, Instant};
 use auv_core::problem::Problem;
 use auv_core::rng::PlannerRng;
 use auv_core::solution::{RunInfo, Solution};
-use auv_core::solver::auto::{AUTO_ITERATIONS, Auto};
-use auv_core::solver::bbo::{Bbo, BboSettings};
 use auv_core::solver::exact::{ExactSettings, solve_exact};
-use auv_core::solver::pso::{Pso, PsoSettings};
-use auv_core::solver::{self, Budget, SolveOutcome, Solver, StopReason};
+use auv_core::solver::{self, Algorithm, Budget, SolveOutcome, Solver, StopReason};
 use clap::ValueEnum;
 
 use super::{CliError, DEFAULT_SEED, load_instance, print};
@@ -51,25 +48,21 @@ impl AlgorithmArg {
     /// the iterations actually run). Returns the solver and its budget, or
     /// `None` for `exact`, which is not an anytime swarm ([`run_exact`]).
     pub fn build(self, iterations: Option<u32>, deadline: bool) -> Option<(Box<dyn Solver>, u32)> {
-        Some(match self {
+        let algorithm = match self {
             Self::Exact => return None,
-            Self::Auto => {
-                // Under a deadline auto's default budget is unbounded, so it
-                // uses the whole deadline (issue 5 §2).
-                let n = iterations.unwrap_or(if deadline { u32::MAX } else { AUTO_ITERATIONS });
-                (Box::new(Auto::default()), n)
-            }
-            Self::Pso => {
-                let mut s = PsoSettings::paper();
-                s.iterations = iterations.unwrap_or(s.iterations);
-                (Box::new(Pso::new(s)), s.iterations)
-            }
-            Self::Bbo => {
-                let mut s = BboSettings::paper();
-                s.generations = iterations.unwrap_or(s.generations);
-                (Box::new(Bbo::new(s)), s.generations)
-            }
-        })
+            Self::Auto => Algorithm::Auto,
+            Self::Pso => Algorithm::Pso,
+            Self::Bbo => Algorithm::Bbo,
+        };
+        // Under a deadline auto's budget is unbounded, so it uses the whole
+        // deadline; the paper's swarms keep their iteration budget.
+        let unbounded = deadline && algorithm == Algorithm::Auto;
+        let n = iterations.unwrap_or(if unbounded {
+            u32::MAX
+        } else {
+            algorithm.paper_iterations()
+        });
+        Some((algorithm.build(n), n))
     }
 }
 

@@ -17,7 +17,7 @@
 //! Every trigger is a full re-plan from the start with the whole budget.
 //!
 //! A deadline miss is a plan *published* later than the deadline after its
-//! trigger *arrived* at the planner (the service's contract, issue 3); plans
+//! trigger *arrived* at the planner (the service's contract); plans
 //! *received* by the trigger's sender later than the deadline after it sent
 //! the trigger are counted separately (`late_received`).
 //!

@@ -72,7 +72,7 @@ pub struct SoakArgs {
 /// Flags that make mission `k`'s processes send bad messages: every kind
 /// the wire layer can inject, from the sensor (snapshots), the vehicle
 /// (states) and the planner (plans), each next to the good message it
-/// spoils (`planner mission --inject-*`, issue 4 "bad input"). The same for
+/// spoils (`planner mission --inject-*`). The same for
 /// every mission: each kind is then rejected in every mission.
 pub fn bad_message_flags() -> Vec<String> {
     [

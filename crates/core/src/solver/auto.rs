@@ -1,4 +1,4 @@
-//! The default planner `auto` (issue 5 §2): a memetic PSO with iterated
+//! The default planner `auto`: a memetic PSO with iterated
 //! local search, tuned for route quality per microsecond.
 //!
 //! Contract: [`Auto`] implements the anytime [`Solver`] contract like PSO

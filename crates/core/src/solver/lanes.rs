@@ -5,8 +5,8 @@
 //! solve, so every number it yields is fixed by the user's seed; it never
 //! touches another source. It exists for speed: a PSO generation on 128
 //! nodes needs ~40 000 uniforms, and sixteen independent states stepped in
-//! lock-step let the compiler run them as one vector (issue 2 §7: "a fast
-//! seeded RNG"), where one xoshiro state is a serial dependency chain (two
+//! lock-step let the compiler run them as one vector (a fast
+//! seeded RNG), where one xoshiro state is a serial dependency chain (two
 //! vectors of eight lanes give the core two chains to overlap). Each
 //! lane is the same algorithm as `PlannerRng` (Blackman & Vigna, ACM TOMS
 //! 2021); lanes are seeded by independent 64-bit draws, which for a

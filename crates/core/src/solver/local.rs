@@ -1,5 +1,5 @@
 //! Local search on decoded routes: the polishing step of the default `auto`
-//! planner (issue 5). Works on any route of a [`Problem`] and any objective.
+//! planner. Works on any route of a [`Problem`] and any objective.
 //!
 //! Moves, each applied only on strict improvement under [`Problem::better`]:
 //! - **insert** an unvisited node between two consecutive route nodes;

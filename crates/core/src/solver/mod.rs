@@ -140,7 +140,7 @@ pub enum Algorithm {
     Pso,
     /// [`Bbo`] with the paper's settings.
     Bbo,
-    /// [`Auto`], the memetic default planner (issue 5).
+    /// [`Auto`], the memetic default planner.
     Auto,
 }
 

@@ -44,7 +44,7 @@
 //!   so a warm solve never returns anything worse than it.
 //! - **Single precision.** Positions, velocities and bests are `f32`: the
 //!   decoder only compares priorities, `f32` resolves ~1e-5 on this range,
-//!   and twice the SIMD width halves the update's cost (issue 2 §7). The
+//!   and twice the SIMD width halves the update's cost. The
 //!   decoder widens `f32` exactly, so results are still exact functions of
 //!   the seed.
 //! - r1 and r2 come from sixteen interleaved xoshiro256++ lanes seeded from the

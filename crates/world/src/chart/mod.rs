@@ -12,8 +12,8 @@
 //! generator. The chart's RGB raster stays available ([`Chart::image`]) for
 //! plots.
 //!
-//! Every default and tunable is a `const` below with its source: issue 2
-//! (k = 3), `shared/maps/README.md` (the charts' scales, copied with the
+//! Every default and tunable is a `const` below with its source: the project's
+//! chart set-up (k = 3), `shared/maps/README.md` (the charts' scales, copied with the
 //! attribution to `crates/world/assets/ATTRIBUTION.md`), or "our choice" with the
 //! measurement behind it.
 //!
@@ -53,7 +53,7 @@ pub use mask::WaterMask;
 // Defaults and tunables, with their sources (the one place they are set).
 // ---------------------------------------------------------------------------
 
-/// Number of k-means clusters. Source: issue 2 §1 ("k configurable, default 3"):
+/// Number of k-means clusters. Source: the project's chart set-up (k configurable, default 3):
 /// water, land, coastline ink.
 pub const DEFAULT_K: usize = 3;
 /// Seed of the classification's random choices (subsample, seeding). Our

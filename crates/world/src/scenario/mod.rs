@@ -32,22 +32,22 @@
 //!
 //! | field | default | meaning | source |
 //! | --- | --- | --- | --- |
-//! | `nodes` | 40 | waypoints n; node 0 the start, node n−1 the goal; 2..=128 ([`MAX_NODES`]) | issue 2 §2 (the paper's network size) |
-//! | `dynamic` | 10 | dynamic waypoints d ≤ n−2 | issue 2 §2 |
+//! | `nodes` | 40 | waypoints n; node 0 the start, node n−1 the goal; 2..=128 ([`MAX_NODES`]) | the paper's model (network size) |
+//! | `dynamic` | 10 | dynamic waypoints d ≤ n−2 | the paper's model |
 //! | which nodes are dynamic | ids 1..=d | start and goal stay static; lowest ids so that changing n keeps them | our choice: the paper is silent |
-//! | static position | x ~ U(0, width), y ~ U(0, height), resampled until over water; z ~ U(0, `depth_max_m`) | also a dynamic waypoint's nominal position | issue 2 §2 |
-//! | `depth_max_m` | 1000 m | depth range [0, 1000 m] | issue 2 §2 |
-//! | `bound_sigma_m` | 300 m | σ_b: each dynamic waypoint's bound per axis is \|N(0, σ_b²)\| | issue 2 §2 |
-//! | `sigma_m` | 150 m | σ: actual = nominal + N(0, σ²) per axis, truncated to the bound ∩ area ∩ depth range, (x, y) resampled while on land | issue 2 §2 |
-//! | `priority` | U[1, 10] | task priority ρ, per node pair | issue 2 §2 |
-//! | `risk` | U[0.1, 1.0] | task risk ξ, per node pair | issue 2 §2 |
-//! | `task_time_s` | U[120, 900] s | task completion time δ, per node pair | issue 2 §2 |
-//! | `speed_mps` | 1.5 m/s | vehicle speed v; edge time T = 3-D length / v + δ | issue 2 §2 |
-//! | `time_available_s` | 31 000 s | budget T_available | issue 2 §2 |
+//! | static position | x ~ U(0, width), y ~ U(0, height), resampled until over water; z ~ U(0, `depth_max_m`) | also a dynamic waypoint's nominal position | the paper's model |
+//! | `depth_max_m` | 1000 m | depth range [0, 1000 m] | the paper's model |
+//! | `bound_sigma_m` | 300 m | σ_b: each dynamic waypoint's bound per axis is \|N(0, σ_b²)\| | the paper's model |
+//! | `sigma_m` | 150 m | σ: actual = nominal + N(0, σ²) per axis, truncated to the bound ∩ area ∩ depth range, (x, y) resampled while on land | the paper's model |
+//! | `priority` | U[1, 10] | task priority ρ, per node pair | the paper's model |
+//! | `risk` | U[0.1, 1.0] | task risk ξ, per node pair | the paper's model |
+//! | `task_time_s` | U[120, 900] s | task completion time δ, per node pair | the paper's model |
+//! | `speed_mps` | 1.5 m/s | vehicle speed v; edge time T = 3-D length / v + δ | the paper's model |
+//! | `time_available_s` | 31 000 s | budget T_available | the paper's model |
 //! | `objective` | `max_weight` | objective written into snapshots | instance format (its default) |
-//! | `chart` | `benoits-cove` | embedded chart, 5 km × 10 km, 10 m/px | issue 2 §1 |
-//! | `k` | 3 | k-means clusters of the chart (2..=16) | issue 2 §1 |
-//! | `sensor_period_s` | 60 s | mission time between two redraws of the dynamic waypoints | issue 3 (sensor-sim) |
+//! | `chart` | `benoits-cove` | embedded chart, 5 km × 10 km, 10 m/px | the project's chart set-up (5 km × 10 km Benoit's Cove, k = 3) |
+//! | `k` | 3 | k-means clusters of the chart (2..=16) | the project's chart set-up (5 km × 10 km Benoit's Cove, k = 3) |
+//! | `sensor_period_s` | 60 s | mission time between two redraws of the dynamic waypoints | our choice: the paper is silent (sensor-sim's period) |
 //! | `position_attempts` | 100 000 | uniform draws per waypoint before "too little water" (fails on a chart with < ~0.02 % water) | our choice: the paper is silent |
 //! | `redraw_attempts` | 1 000 | truncated-normal draws per dynamic waypoint and redraw before it falls back to its nominal position (always water); counted in [`RedrawReport::fallbacks`] | our choice: the paper is silent |
 //!
