@@ -13,6 +13,7 @@ pub mod instance;
 pub mod mission;
 pub mod montecarlo;
 pub mod msg;
+pub mod msg_layout;
 pub mod oplib;
 pub mod plot;
 pub mod problem;
