@@ -39,6 +39,8 @@ enum Command {
     Montecarlo(cli::montecarlo::Args),
     /// Gap to the optimum and solve time of each algorithm on a folder of instances.
     Quality(cli::quality::Args),
+    /// Print the layout of every message on the wire (JSON: sizes, offsets, enum codes, topics, QoS).
+    WireLayout(cli::wire_layout::Args),
     /// The three-process system: `mission`, `serve`, `bench-latency`.
     #[command(flatten)]
     Ipc(planner::mission::cli::IpcCommand),
@@ -56,6 +58,7 @@ fn main() -> ExitCode {
         Command::ConvertOp(args) => cli::convert_op::run(args),
         Command::Montecarlo(args) => cli::montecarlo::run(args),
         Command::Quality(args) => cli::quality::run(args),
+        Command::WireLayout(args) => cli::wire_layout::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

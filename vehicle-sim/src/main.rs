@@ -117,11 +117,32 @@ struct Vehicle {
 }
 
 impl Vehicle {
-    /// Drains every inbox: snapshots first, then plans, then status (a plan
-    /// answering a trigger is sent before the status that says so).
+    /// Drains every inbox: snapshots first, then plans, then status; then
+    /// plans again when a status came in. A plan answering a trigger is sent
+    /// before the status that says so, so a plan published between the two
+    /// drains is queued by the time its status is seen: taking it before
+    /// moving on keeps lockstep runs deterministic.
     fn drain(&mut self) -> Result<(), Error> {
         let sim = &mut self.sim;
         self.ports.snapshots.drain(&mut |s| sim.apply_snapshot(s))?;
+        self.drain_plans()?;
+        let answered = &mut self.answered;
+        let statuses = self.ports.status.drain(&mut |st| {
+            *answered = Answered {
+                session: st.handled_state_session,
+                state_seq: st.handled_state_seq,
+                epoch: st.handled_epoch,
+            }
+        })?;
+        if statuses > 0 {
+            self.drain_plans()?;
+        }
+        Ok(())
+    }
+
+    /// Offers every plan that arrived to the simulation, journaling those taken.
+    fn drain_plans(&mut self) -> Result<(), Error> {
+        let sim = &mut self.sim;
         let mut rejected = Vec::new();
         let mut accepted = Vec::new();
         self.ports.plans.drain(&mut |p| match sim.offer_plan(p) {
@@ -139,14 +160,6 @@ impl Vehicle {
         for e in &accepted {
             self.record(e)?;
         }
-        let answered = &mut self.answered;
-        self.ports.status.drain(&mut |st| {
-            *answered = Answered {
-                session: st.handled_state_session,
-                state_seq: st.handled_state_seq,
-                epoch: st.handled_epoch,
-            }
-        })?;
         Ok(())
     }
 

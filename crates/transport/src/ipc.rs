@@ -7,7 +7,7 @@
 //! QoS, the same in every process (opening checks each value set as a
 //! minimum, so all sides must agree; one function builds them all):
 //! latest-value topics (history per [`Topic::history_size`], subscriber
-//! buffer 2, safe overflow: a slow or dead subscriber never blocks a
+//! buffer per [`Topic::subscriber_buffer`], safe overflow: a slow or dead subscriber never blocks a
 //! publisher, notes §2 and §5), at most
 //! 2 publishers per topic (a restarted publisher may overlap with its dead
 //! predecessor until the dead node is cleaned), subscribers per
@@ -42,12 +42,68 @@ pub type Shm = iceoryx2::prelude::ipc::Service;
 /// In-process service flavour (no shared memory): for unit tests.
 pub type InProcess = iceoryx2::prelude::local::Service;
 
-/// Samples a subscriber queues before the oldest is overwritten.
-const SUBSCRIBER_BUFFER: usize = 2;
-/// Publishers per topic: one live plus one dead predecessor awaiting cleanup.
-const MAX_PUBLISHERS: usize = 2;
+/// Publishers per topic: one live, one dead predecessor awaiting cleanup,
+/// and one outside tool (a client injecting test messages next to ours).
+const MAX_PUBLISHERS: usize = 3;
 /// Largest event id (topics use 1..=6).
 const EVENT_ID_MAX: usize = 15;
+/// Notifiers per wake service (every publisher of every topic the role
+/// consumes, with room for restarts and outside publishers).
+const WAKE_MAX_NOTIFIERS: usize = 16;
+/// Listeners per wake service: the role's process, its restarted successor
+/// overlapping with the dead one, and two outside clients (a watcher
+/// blocks on the vehicle's wake service to see plans as they come).
+const WAKE_MAX_LISTENERS: usize = 4;
+
+/// The publish-subscribe QoS of one topic, identical in every process (and
+/// in every outside client: a service opened with other values fails).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TopicQos {
+    /// Samples a late subscriber is handed.
+    pub history_size: usize,
+    /// Samples a subscriber queues before the oldest is overwritten.
+    pub subscriber_max_buffer_size: usize,
+    /// Samples a subscriber may hold at once.
+    pub subscriber_max_borrowed_samples: usize,
+    /// A full subscriber queue overwrites its oldest sample (never blocks the publisher).
+    pub enable_safe_overflow: bool,
+    /// Publishers the service admits.
+    pub max_publishers: usize,
+    /// Subscribers the service admits.
+    pub max_subscribers: usize,
+}
+
+/// The QoS of `topic`'s service.
+pub fn topic_qos(topic: super::Topic) -> TopicQos {
+    TopicQos {
+        history_size: topic.history_size(),
+        subscriber_max_buffer_size: topic.subscriber_buffer(),
+        subscriber_max_borrowed_samples: 1,
+        enable_safe_overflow: true,
+        max_publishers: MAX_PUBLISHERS,
+        max_subscribers: topic.max_subscribers(),
+    }
+}
+
+/// The QoS of every wake event service.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WakeQos {
+    /// Largest event id.
+    pub event_id_max_value: usize,
+    /// Notifiers the service admits.
+    pub max_notifiers: usize,
+    /// Listeners the service admits.
+    pub max_listeners: usize,
+}
+
+/// The QoS of the wake services.
+pub fn wake_qos() -> WakeQos {
+    WakeQos {
+        event_id_max_value: EVENT_ID_MAX,
+        max_notifiers: WAKE_MAX_NOTIFIERS,
+        max_listeners: WAKE_MAX_LISTENERS,
+    }
+}
 
 fn iox(step: impl Into<String>, cause: impl core::fmt::Debug) -> SetupError {
     SetupError::Iceoryx {
@@ -129,27 +185,29 @@ impl<S: Service> IpcContext<S> {
 
     fn pubsub<T: OnTopic>(&self) -> Result<PubSubFactory<S, T, ()>, SetupError> {
         let name = self.opts.service_name(T::TOPIC);
+        let q = topic_qos(T::TOPIC);
         self.node
             .service_builder(&self.service_name(&name)?)
             .publish_subscribe::<T>()
-            .history_size(T::TOPIC.history_size())
-            .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
-            .subscriber_max_borrowed_samples(1)
-            .enable_safe_overflow(true)
-            .max_publishers(MAX_PUBLISHERS)
-            .max_subscribers(T::TOPIC.max_subscribers())
+            .history_size(q.history_size)
+            .subscriber_max_buffer_size(q.subscriber_max_buffer_size)
+            .subscriber_max_borrowed_samples(q.subscriber_max_borrowed_samples)
+            .enable_safe_overflow(q.enable_safe_overflow)
+            .max_publishers(q.max_publishers)
+            .max_subscribers(q.max_subscribers)
             .open_or_create()
             .map_err(|e| iox(format!("open service {name}"), e))
     }
 
     fn wake_service(&self, role: Role) -> Result<EventFactory<S>, SetupError> {
         let name = self.opts.wake_name(role);
+        let w = wake_qos();
         self.node
             .service_builder(&self.service_name(&name)?)
             .event()
-            .event_id_max_value(EVENT_ID_MAX)
-            .max_notifiers(16)
-            .max_listeners(2)
+            .event_id_max_value(w.event_id_max_value)
+            .max_notifiers(w.max_notifiers)
+            .max_listeners(w.max_listeners)
             .open_or_create()
             .map_err(|e| iox(format!("open event service {name}"), e))
     }
@@ -462,9 +520,23 @@ mod tests {
         inbox
             .drain(&mut |p: &Plan| seen.push((p.header.seq, p.header.session, p.header.fingerprint, p.iterations)))
             .unwrap();
+        // Plans queue deep: none was lost.
+        assert_eq!(seen, vec![(1, 5, 9, 0), (2, 5, 9, 1), (3, 5, 9, 2)]);
+    }
+
+    #[test]
+    fn a_full_state_queue_overwrites_its_oldest_sample() {
+        let prefix = unique_prefix("u");
+        let c = ctx(&prefix, "v4");
+        let mut inbox = c.inbox::<VehicleState>().unwrap();
+        let mut out = c.outbox::<VehicleState>(Stamp::new(1)).unwrap();
+        for k in 1..=3u32 {
+            out.publish(&mut |s: &mut VehicleState| s.arrivals = k).unwrap();
+        }
+        let mut got = Vec::new();
+        inbox.drain(&mut |s: &VehicleState| got.push(s.arrivals)).unwrap();
         // Buffer 2 with safe overflow: the oldest was overwritten.
-        assert_eq!(seen, vec![(2, 5, 9, 1), (3, 5, 9, 2)]);
-        assert!(seen.iter().all(|s| s.0 > 0));
+        assert_eq!(got, vec![2, 3]);
     }
 
     #[test]

@@ -27,6 +27,7 @@
 
 pub mod guard;
 pub mod ipc;
+pub mod layout;
 
 use core::time::Duration;
 
@@ -99,12 +100,29 @@ impl Topic {
         }
     }
 
-    /// Subscribers the topic's service admits (consumers plus monitors and a
-    /// restarted consumer overlapping with its dead predecessor).
+    /// Samples a subscriber queues before the oldest is overwritten. Plans
+    /// come in bursts (a re-plan per sensor update at 1000× real time and
+    /// more) and each one matters to an observer counting them, so their
+    /// queue is deep (a plan is 280 B); the state topics keep only the
+    /// freshest values.
+    pub fn subscriber_buffer(self) -> usize {
+        match self {
+            Self::Plan => 64,
+            _ => 2,
+        }
+    }
+
+    /// Subscribers the topic's service admits: its consumers, the mission's
+    /// monitor, [`OUTSIDE_CLIENTS`] outside clients (watchers, bridges), and
+    /// a restarted consumer overlapping with its dead predecessor.
     pub fn max_subscribers(self) -> usize {
-        4
+        self.consumers().len() + 1 + OUTSIDE_CLIENTS + 1
     }
 }
+
+/// Outside clients (in any language) that can subscribe to every topic at
+/// the same time as the mission's own processes.
+pub const OUTSIDE_CLIENTS: usize = 2;
 
 /// A process's part in the system; names its wake service.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -13,6 +13,7 @@ pub mod export;
 pub mod montecarlo;
 pub mod quality;
 pub mod solve;
+pub mod wire_layout;
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};

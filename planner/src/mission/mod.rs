@@ -2,6 +2,7 @@
 //! latency bench; and the entry points of the three-process subcommands.
 pub mod bench;
 pub mod cli;
+pub mod external;
 pub mod log;
 pub mod report;
 pub mod run;

@@ -23,6 +23,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use heapless::spsc::Queue;
 
+use super::external::{ExternalArgs, VehicleFigures, announce, wait_for_outside_nodes};
 use super::log::lines;
 use super::report::Report;
 use super::supervise::{
@@ -99,6 +100,9 @@ pub struct MissionArgs {
     /// Tests: passed to vehicle-sim as `--inject` (bad vehicle states next to good ones).
     #[arg(long, value_name = "KIND[,KIND…]")]
     pub inject_vehicle: Option<String>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub external: ExternalArgs,
 }
 
 /// Why a mission failed.
@@ -476,10 +480,14 @@ fn threaded(
     plan_faults: FaultCycle,
 ) -> Result<RunOut, MissionError> {
     let (out, vehicle_args, budget) = (l.out.to_path_buf(), l.vehicle_args, l.budget);
-    let mut kids = [
-        Kid::spawn("sensor-sim", l.sensor_args, &out)?,
-        Kid::spawn("vehicle-sim", vehicle_args, &out)?,
-    ];
+    // An outside vehicle or sensor takes the place of the simulator.
+    let mut kids = Vec::with_capacity(2);
+    if !a.external.external_sensor {
+        kids.push(Kid::spawn("sensor-sim", l.sensor_args, &out)?);
+    }
+    if !a.external.external_vehicle {
+        kids.push(Kid::spawn("vehicle-sim", vehicle_args, &out)?);
+    }
 
     let log_path = out.join("mission.log");
     let mut log = BufWriter::new(File::create(&log_path).map_err(|e| io_err(&log_path, e))?);
@@ -1042,11 +1050,17 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         vehicle_args: &vehicle_args,
         budget,
     };
+    if a.external.any() {
+        announce(a.external, &prefix, &a.vehicle, fingerprint, a.lockstep, &out);
+    }
     let run = if a.planner_process || a.faults > 0 {
         supervised(a, &opts, &launch, world.sensor_period_s(), fingerprint)
     } else {
         threaded(a, opts, fingerprint, cfg, &launch, rules, plan_faults)
     };
+    if a.external.any() && !wait_for_outside_nodes(&prefix, Duration::from_secs(10))? {
+        eprintln!("planner: outside processes are still attached to domain {prefix}");
+    }
     let retired = retire_domain(&prefix)?;
     let left = leftover_files(&prefix);
     if !retired {
@@ -1056,22 +1070,20 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let last = run.last_state;
     // What happened is what the vehicle's journal says.
     let journal = JournalSummary::read(&journal_path).map_err(|e| MissionError::Child(e.to_string()))?;
-    let outcome = match (run.finished, journal.outcome()) {
-        (true, Some(o)) => o,
-        _ => Outcome::Aborted,
-    };
+    let figures = VehicleFigures::of(&journal, last.as_ref(), run.finished);
+    let outcome = figures.outcome;
     let stale_plans = last.map_or(0, |s| s.stale_plans);
     let rejected_vehicle = RejectCounters(last.map_or([0; auv_messages::msg::REJECT_KINDS], |s| s.rejected));
     let c = run.totals;
     let trace = run.trace;
     let report = Report {
         outcome,
-        time_used_s: journal.time_s(),
+        time_used_s: figures.time_s,
         time_available_s: budget,
-        tasks_completed: journal.tasks(),
-        weight: journal.weight(),
-        distance_m: journal.distance_m(),
-        route: journal.route(),
+        tasks_completed: figures.tasks,
+        weight: figures.weight,
+        distance_m: figures.distance_m,
+        route: figures.route,
         plans: c.plans,
         latency_us: c.latency_us,
         deadline_ms: cfg.deadline.as_secs_f64() * 1000.0,

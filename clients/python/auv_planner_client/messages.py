@@ -1,0 +1,287 @@
+"""ctypes mirrors of every message on the planner's wire.
+
+Each class mirrors the Rust struct of the same name in ``crates/messages/src/msg.rs``
+field by field (``#[repr(C)]``, no implicit padding). ``type_name()`` returns
+the Rust ``#[type_name]``: iceoryx2 connects two sides only when the type
+name, size and alignment agree. ``tests/test_layout.py`` compares every class
+here with ``planner wire-layout`` and fails on any drift.
+
+Units: m, s, m/s, ns; x east, y north, z depth (positive down).
+"""
+
+import ctypes
+from ctypes import c_double, c_uint8, c_uint32, c_uint64
+
+MAX_NODES = 128
+MAX_EDGES = MAX_NODES * (MAX_NODES - 1) // 2
+REJECT_KINDS = 12
+NO_NODE = 0xFFFF_FFFF
+
+
+class Header(ctypes.Structure):
+    """The common start of every message."""
+
+    _fields_ = [
+        ("seq", c_uint64),
+        ("session", c_uint64),
+        ("fingerprint", c_uint64),
+        ("sent_mono_ns", c_uint64),
+        ("mission_time_s", c_double),
+    ]
+
+
+class WireNode(ctypes.Structure):
+    """A waypoint as reported: position (m) and prize."""
+
+    _fields_ = [("x", c_double), ("y", c_double), ("z", c_double), ("prize", c_double)]
+
+
+class WireEdge(ctypes.Structure):
+    """An edge that exists now, with its task."""
+
+    _fields_ = [
+        ("a", c_uint32),
+        ("b", c_uint32),
+        ("priority", c_double),
+        ("risk", c_double),
+        ("task_time_s", c_double),
+    ]
+
+
+class AllocCounters(ctypes.Structure):
+    """Allocation counters of the planner's service thread."""
+
+    _fields_ = [
+        ("sys_allocs_total", c_uint64),
+        ("sys_allocs_steady", c_uint64),
+        ("sys_frees_steady", c_uint64),
+        ("pool_allocs_steady", c_uint64),
+        ("pool_high_water", c_uint64),
+        ("pool_capacity", c_uint64),
+        ("pool_misses", c_uint64),
+        ("steady", c_uint64),
+    ]
+
+
+class WaypointSnapshot(ctypes.Structure):
+    """sensor -> planner, vehicle: the whole network as the sensor sees it now."""
+
+    _fields_ = [
+        ("header", Header),
+        ("epoch", c_uint64),
+        ("speed_mps", c_double),
+        ("time_available_s", c_double),
+        ("phi1", c_double),
+        ("phi2", c_double),
+        ("next_update_s", c_double),
+        ("objective", c_uint32),
+        ("node_count", c_uint32),
+        ("edge_count", c_uint32),
+        ("start", c_uint32),
+        ("goal", c_uint32),
+        ("_pad", c_uint32),
+        ("nodes", WireNode * MAX_NODES),
+        ("edges", WireEdge * MAX_EDGES),
+    ]
+
+    @staticmethod
+    def type_name():
+        return "auv.WaypointSnapshot.v1"
+
+
+class VehicleState(ctypes.Structure):
+    """vehicle -> planner, sensor: where the vehicle is and what it has done."""
+
+    _fields_ = [
+        ("header", Header),
+        ("position", c_double * 3),
+        ("time_left_s", c_double),
+        ("eta_free_s", c_double),
+        ("weight", c_double),
+        ("distance_m", c_double),
+        ("time_scale", c_double),
+        ("plan_seq", c_uint64),
+        ("snapshot_epoch", c_uint64),
+        ("mode", c_uint32),
+        ("event", c_uint32),
+        ("outcome", c_uint32),
+        ("from_node", c_uint32),
+        ("to_node", c_uint32),
+        ("arrivals", c_uint32),
+        ("tasks_completed", c_uint32),
+        ("needs_answer", c_uint32),
+        ("stale_plans", c_uint32),
+        ("route_len", c_uint32),
+        ("rejected", c_uint64 * REJECT_KINDS),
+        ("route", c_uint8 * MAX_NODES),
+    ]
+
+    @staticmethod
+    def type_name():
+        return "auv.VehicleState.v2"
+
+
+class Plan(ctypes.Structure):
+    """planner -> vehicle: the route from where the vehicle will be free to the goal."""
+
+    _fields_ = [
+        ("header", Header),
+        ("state_seq", c_uint64),
+        ("snapshot_epoch", c_uint64),
+        ("trigger_sent_mono_ns", c_uint64),
+        ("trigger_received_mono_ns", c_uint64),
+        ("compute_ns", c_uint64),
+        ("solve_ns", c_uint64),
+        ("time_s", c_double),
+        ("weight", c_double),
+        ("distance_m", c_double),
+        ("budget_s", c_double),
+        ("trigger", c_uint32),
+        ("iterations", c_uint32),
+        ("deadline_cut", c_uint32),
+        ("feasible", c_uint32),
+        ("fallback", c_uint32),
+        ("replan", c_uint32),
+        ("route_len", c_uint32),
+        ("_pad", c_uint32),
+        ("route", c_uint8 * MAX_NODES),
+    ]
+
+    @staticmethod
+    def type_name():
+        return "auv.Plan.v2"
+
+
+class PlannerStatus(ctypes.Structure):
+    """planner -> anyone: counters and latency, sent after every handled input."""
+
+    _fields_ = [
+        ("header", Header),
+        ("handled_state_seq", c_uint64),
+        ("handled_state_session", c_uint64),
+        ("handled_epoch", c_uint64),
+        ("plans", c_uint64),
+        ("triggers", c_uint64),
+        ("sensor_updates", c_uint64),
+        ("updates_without_replan", c_uint64),
+        ("deadline_misses", c_uint64),
+        ("deadline_cuts", c_uint64),
+        ("fallbacks", c_uint64),
+        ("last_latency_ns", c_uint64),
+        ("max_latency_ns", c_uint64),
+        ("deadline_ns", c_uint64),
+        ("alloc", AllocCounters),
+        ("rejected", c_uint64 * REJECT_KINDS),
+        ("iterations_total", c_uint64),
+        ("phase", c_uint32),
+        ("last_iterations", c_uint32),
+        ("rt_priority", c_uint32),
+        ("_pad", c_uint32),
+    ]
+
+    @staticmethod
+    def type_name():
+        return "auv.PlannerStatus.v3"
+
+
+#: Nested structs, as ``planner wire-layout`` lists them under "structs".
+STRUCTS = [Header, WireNode, WireEdge, AllocCounters]
+#: Messages, as ``planner wire-layout`` lists them under "messages".
+MESSAGES = [WaypointSnapshot, VehicleState, Plan, PlannerStatus]
+
+
+class ObjectiveCode:
+    MAX_WEIGHT = 0
+    PAPER_COST = 1
+
+
+class VehicleMode:
+    NO_PLAN = 0
+    TRAVELLING = 1
+    WORKING = 2
+    HOLDING = 3
+    FINISHED = 4
+
+
+class VehicleEvent:
+    PERIODIC = 0
+    START = 1
+    ARRIVAL = 2
+    TICK = 3
+    FINISHED = 4
+
+
+class Outcome:
+    RUNNING = 0
+    GOAL_REACHED = 1
+    TIMED_OUT = 2
+    ABORTED = 3
+
+
+class TriggerKind:
+    INITIAL = 0
+    ARRIVAL = 1
+    EDGE_LOST = 2
+    TIME_CHANGED = 3
+    INFEASIBLE = 4
+    SENSOR_BACK = 5
+
+
+class PlannerPhase:
+    WAITING = 0
+    RUNNING = 1
+    FINISHED = 2
+
+
+#: Reject kinds in counter order (the index into every ``rejected`` array).
+REJECT_KIND_NAMES = [
+    "foreign_scenario",
+    "out_of_order",
+    "repeated",
+    "non_finite",
+    "node_out_of_range",
+    "malformed",
+    "bad_plan",
+    "off_water",
+    "outside_bound",
+    "out_of_range",
+    "non_edge",
+    "visited_node",
+]
+
+#: The enums as ``planner wire-layout`` names them: {enum: {snake_name: code}}.
+ENUMS = {
+    "ObjectiveCode": {"max_weight": 0, "paper_cost": 1},
+    "VehicleMode": {"no_plan": 0, "travelling": 1, "working": 2, "holding": 3, "finished": 4},
+    "VehicleEvent": {"periodic": 0, "start": 1, "arrival": 2, "tick": 3, "finished": 4},
+    "Outcome": {"running": 0, "goal_reached": 1, "timed_out": 2, "aborted": 3},
+    "TriggerKind": {
+        "initial": 0,
+        "arrival": 1,
+        "edge_lost": 2,
+        "time_changed": 3,
+        "infeasible": 4,
+        "sensor_back": 5,
+    },
+    "PlannerPhase": {"waiting": 0, "running": 1, "finished": 2},
+    "RejectKind": {name: k for k, name in enumerate(REJECT_KIND_NAMES)},
+}
+
+
+def name_of(enum, code):
+    """The snake_case name of ``code`` in ``enum`` (one of ``ENUMS``), or ``"unknown(<code>)"``."""
+    for name, c in ENUMS[enum].items():
+        if c == code:
+            return name
+    return "unknown(%d)" % code
+
+
+def copy_of(cls, address):
+    """A copy of the ``cls`` message at ``address`` (a sample's payload pointer)."""
+    return cls.from_buffer_copy(ctypes.string_at(address, ctypes.sizeof(cls)))
+
+
+def route_of(msg):
+    """The route of a plan or vehicle state as a list of node ids (length checked against capacity)."""
+    n = min(int(msg.route_len), MAX_NODES)
+    return list(msg.route[:n])

@@ -1,0 +1,32 @@
+#!/bin/sh
+# Runs the Python client's test suite against the real binaries.
+#
+#   clients/python/run-tests.sh [pytest args…]
+#
+# Creates (once) a virtual environment under the workspace's target/
+# folder, installs this package into it the way a user does
+# (`pip install ./clients/python`, which pulls iceoryx2==0.10.0 from PyPI)
+# plus pytest, and runs the tests from outside the source tree so they
+# exercise the installed package. AUV_BIN_DIR names the folder of the
+# planner, sensor-sim and vehicle-sim binaries (default target/debug; `cargo
+# test --test python` sets it to its own profile's folder).
+set -eu
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+target=${CARGO_TARGET_DIR:-$root/target}
+venv=$target/pyenv
+python=${PYTHON:-python3}
+
+if [ ! -x "$venv/bin/python" ]; then
+    "$python" -m venv "$venv"
+fi
+"$venv/bin/pip" install --quiet --disable-pip-version-check "$here" pytest
+export AUV_BIN_DIR="${AUV_BIN_DIR:-$target/debug}"
+for b in planner sensor-sim vehicle-sim; do
+    if [ ! -x "$AUV_BIN_DIR/$b" ]; then
+        echo "run-tests.sh: $AUV_BIN_DIR/$b is missing: build it first (cargo build --workspace)" >&2
+        exit 2
+    fi
+done
+cd "$target"
+exec "$venv/bin/python" -m pytest -p no:cacheprovider --rootdir "$here/tests" "$here/tests" "$@"
