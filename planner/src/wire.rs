@@ -23,8 +23,8 @@
 use std::sync::Arc;
 
 use crate::chart::WaterMap;
-use crate::chart::mask::WaterMask;
 use crate::mission::world::MissionWorld;
+use crate::mission_file::Water;
 use crate::msg::{Header, MAX_EDGES, RejectKind, VehicleState, WaypointSnapshot, route_ids};
 use crate::problem::{MAX_NODES, NodeSet};
 use crate::scenario::{World, bound_interval};
@@ -34,7 +34,7 @@ use crate::transport::guard::ContextCheck;
 #[derive(Clone, Debug)]
 pub struct WireRules {
     world: World,
-    mask: WaterMask,
+    water: Water,
 }
 
 impl WireRules {
@@ -42,7 +42,7 @@ impl WireRules {
     pub fn new(world: &MissionWorld) -> Self {
         Self {
             world: world.world().clone(),
-            mask: world.map().mask.clone(),
+            water: world.map().clone(),
         }
     }
 
@@ -53,13 +53,13 @@ impl WireRules {
 
     /// Whether (x, y) is navigable water, m.
     pub fn is_water(&self, x: f64, y: f64) -> bool {
-        self.mask.is_water(x, y)
+        self.water.is_water(x, y)
     }
 
     /// Checks waypoint `i` (< n) at `(x, y, z)`: over water first (a
     /// waypoint on land is the worse fault), then inside its bound.
     fn check_node(&self, i: usize, x: f64, y: f64, z: f64) -> Result<(), RejectKind> {
-        if !self.mask.is_water(x, y) {
+        if !self.water.is_water(x, y) {
             return Err(RejectKind::OffWater);
         }
         let nom = self.world.nominal_positions()[i];
@@ -128,7 +128,7 @@ impl WireRules {
                 let (c, r) = (k % GRID, k / GRID);
                 ((c as f64 + 0.5) * w / GRID as f64, (r as f64 + 0.5) * h / GRID as f64)
             })
-            .find(|&(x, y)| !self.mask.is_water(x, y))
+            .find(|&(x, y)| !self.water.is_water(x, y))
     }
 
     /// `check_snapshot` as a [`ContextCheck`] for a guarded inbox.
@@ -505,7 +505,8 @@ mod tests {
 
     fn world(seed: u64) -> MissionWorld {
         load_world(&ScenarioArgs {
-            seed,
+            seed: Some(seed),
+            mission: None,
             scenario: None,
             nodes: Some(16),
             time_available_s: None,

@@ -98,6 +98,10 @@ pub struct MissionArgs {
     /// Tests: passed to vehicle-sim as `--inject` (bad vehicle states next to good ones).
     #[arg(long, value_name = "KIND[,KIND…]")]
     pub inject_vehicle: Option<String>,
+    /// Print the embedded default mission file (`auv-mission/1`) and exit:
+    /// a starting point for your own.
+    #[arg(long)]
+    pub print_default: bool,
 }
 
 /// Why a mission failed.
@@ -487,6 +491,8 @@ struct Launch<'a> {
     vehicle_args: &'a [String],
     /// Mission time budget, s.
     budget: f64,
+    /// The scenario seed (the default fault seed).
+    seed: u64,
 }
 
 /// Runs the mission with the service on a thread of this process.
@@ -717,7 +723,7 @@ fn supervised(
         Kid::spawn("sensor-sim", l.sensor_args, out)?,
         Kid::spawn("vehicle-sim", vehicle_args, out)?,
     ];
-    let fault_seed = a.fault_seed.unwrap_or(a.scenario.seed);
+    let fault_seed = a.fault_seed.unwrap_or(l.seed);
     let faults = plan_faults(fault_seed, a.faults, budget, &Proc::ALL);
     let mut report = FaultReport {
         planned: faults.clone(),
@@ -1024,7 +1030,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let rules = Arc::new(WireRules::new(&world));
     let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
     let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
-    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
+    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(world.seed()));
     std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
     signal::install();
     cleanup_dead_nodes(&domain_config(&prefix)?);
@@ -1065,6 +1071,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         sensor_args: &sensor_args,
         vehicle_args: &vehicle_args,
         budget,
+        seed: world.seed(),
     };
     let run = if a.planner_process || a.faults > 0 {
         supervised(a, &opts, &launch, world.sensor_period_s(), fingerprint)
@@ -1109,7 +1116,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         rejected: c.rejected,
         rejected_vehicle,
         stale_plans,
-        seed: a.scenario.seed,
+        seed: world.seed(),
         planner_seed: a.service.planner_seed,
         fingerprint,
         scenario: world.describe(),
@@ -1128,11 +1135,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
     std::fs::write(&report_path, text + "\n").map_err(|e| io_err(&report_path, e))?;
-    let title = format!(
-        "Mission, seed {}: {}",
-        a.scenario.seed,
-        super::log::outcome_name(outcome)
-    );
+    let title = format!("Mission, seed {}: {}", world.seed(), super::log::outcome_name(outcome));
     plot(&out.join("mission.svg"), &mut world, &trace, &title)?;
     Ok((report, out))
 }
@@ -1140,6 +1143,10 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
 /// Runs `planner mission`: 0 when the mission ran to its end (goal or time
 /// out: see the report), 1 on an error, 2 on bad arguments, 130 when stopped.
 pub fn run_mission(a: &MissionArgs) -> ExitCode {
+    if a.print_default {
+        print!("{}", crate::mission_file::DEFAULT_MISSION_TOML);
+        return ExitCode::SUCCESS;
+    }
     match mission(a) {
         Ok((report, out)) => {
             if !a.quiet {
@@ -1152,7 +1159,9 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
                 ExitCode::SUCCESS
             }
         }
-        Err(e @ MissionError::Usage(_)) => {
+        // A world that cannot be built is bad input (a file or a flag),
+        // refused before any process starts.
+        Err(e @ (MissionError::Usage(_) | MissionError::World(_))) => {
             eprintln!("planner: error: {e}");
             ExitCode::from(2)
         }
