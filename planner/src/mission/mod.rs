@@ -6,6 +6,7 @@ pub mod host;
 pub mod journal;
 pub mod log;
 pub mod report;
+pub mod route_geojson;
 pub mod run;
 pub mod soak;
 pub mod supervise;

@@ -1136,8 +1136,39 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
     std::fs::write(&report_path, text + "\n").map_err(|e| io_err(&report_path, e))?;
     let title = format!("Mission, seed {}: {}", world.seed(), super::log::outcome_name(outcome));
+    let geojson_path = out.join("route.geojson");
+    let visits = journal_visits(&journal, &world);
+    let collection = super::route_geojson::route_geojson(&world, &visits);
+    std::fs::write(&geojson_path, collection.to_string() + "\n").map_err(|e| io_err(&geojson_path, e))?;
     plot(&out.join("mission.svg"), &mut world, &trace, &title)?;
     Ok((report, out))
+}
+
+/// Where the vehicle was, in order, from its journal: the start (at its
+/// nominal position), then every arrival.
+fn journal_visits(journal: &JournalSummary, world: &MissionWorld) -> Vec<super::route_geojson::Visit> {
+    use super::route_geojson::Visit;
+    let w = world.world();
+    let mut visits = Vec::new();
+    for e in &journal.events {
+        match e {
+            JournalEvent::Start { t, node, .. } if visits.is_empty() => {
+                let p = w.nominal_positions().get(*node).copied().unwrap_or_default();
+                visits.push(Visit {
+                    t: *t,
+                    node: *node,
+                    at: (p.x, p.y),
+                });
+            }
+            JournalEvent::Arrival { t, node, pos, .. } => visits.push(Visit {
+                t: *t,
+                node: *node,
+                at: (pos[0], pos[1]),
+            }),
+            _ => {}
+        }
+    }
+    visits
 }
 
 /// Runs `planner mission`: 0 when the mission ran to its end (goal or time
@@ -1151,7 +1182,10 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
         Ok((report, out)) => {
             if !a.quiet {
                 println!("{}", report.summary());
-                println!("wrote {}/report.json, mission.log, mission.svg", out.display());
+                println!(
+                    "wrote {}/report.json, mission.log, mission.svg, route.geojson",
+                    out.display()
+                );
             }
             if report.outcome == Outcome::Aborted {
                 ExitCode::from(130)
