@@ -5,6 +5,7 @@ pub mod cli;
 pub mod host;
 pub mod journal;
 pub mod log;
+pub mod picture;
 pub mod report;
 pub mod route_geojson;
 pub mod run;

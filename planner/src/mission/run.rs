@@ -31,7 +31,7 @@ use super::supervise::{
 };
 use super::world::{MissionWorld, ScenarioArgs, WorldError, load_world};
 use crate::msg::{Outcome, RejectCounters, VehicleState};
-use crate::plot::{BoundMarker, MapFigure, PlotError, RouteLayer, map_figure};
+use crate::plot::PlotError;
 use crate::service::alloc;
 use crate::service::cli::{ServeError, ServiceArgs, make_solver, open_ports, prepare_service_thread};
 use crate::service::core::{PlannerCore, ServiceConfig, ServiceCounters, ServiceEvent};
@@ -392,6 +392,9 @@ fn fresh_out_dir(seed: u64) -> PathBuf {
 struct Trace {
     arrivals: Vec<(f64, f64)>,
     replans_at: Vec<(f64, f64)>,
+    /// Where a re-plan changed the route (a re-plan that confirms the plan
+    /// in force is not drawn).
+    changed_at: Vec<(f64, f64)>,
     first_plan: Vec<usize>,
     last_plan: Vec<usize>,
     last_epoch: u64,
@@ -406,6 +409,9 @@ impl Trace {
                     self.first_plan = route.to_vec();
                 } else {
                     self.replans_at.push(at);
+                    if changes_route(&self.last_plan, &route.to_vec()) {
+                        self.changed_at.push(at);
+                    }
                 }
                 self.last_plan = route.to_vec();
             }
@@ -415,56 +421,115 @@ impl Trace {
     }
 }
 
-fn plot(path: &Path, world: &mut MissionWorld, trace: &Trace, title: &str) -> Result<(), MissionError> {
-    let start = world.snapshot();
-    let start_xy = (start.nodes[start.start].x, start.nodes[start.start].y);
-    if trace.last_epoch > 0 {
-        world.redraw(trace.last_epoch);
+/// Whether plan `new` changes the route of plan `old`: a plan that is the
+/// rest of the old one from where the vehicle now is (it only dropped the
+/// waypoints already passed) changes nothing.
+fn changes_route(old: &[usize], new: &[usize]) -> bool {
+    match new.first().and_then(|&here| old.iter().position(|&i| i == here)) {
+        Some(k) => old[k..] != *new,
+        None => true,
     }
-    let inst = world.snapshot();
-    let w = world.world();
-    let waypoints: Vec<(f64, f64)> = inst.nodes.iter().map(|n| (n.x, n.y)).collect();
-    let bounds: Vec<BoundMarker> = w
-        .dynamic_nodes()
+}
+
+/// Draws `mission.svg` and `mission.png` (see [`super::picture`]).
+fn plot(
+    stem: &Path,
+    world: &mut MissionWorld,
+    trace: &Trace,
+    visits: &[super::route_geojson::Visit],
+    report: &Report,
+) -> Result<(), MissionError> {
+    use super::picture::{PicDrift, PicKind, PicWaypoint, Picture};
+    let start = world.snapshot();
+    let w = world.world().clone();
+    let nominal = |i: usize| (w.nominal_positions()[i].x, w.nominal_positions()[i].y);
+    let dynamic: Vec<usize> = w.dynamic_nodes().iter().collect();
+    let mut drifts: Vec<PicDrift> = dynamic
         .iter()
-        .map(|i| BoundMarker {
-            nominal: (w.nominal_positions()[i].x, w.nominal_positions()[i].y),
+        .map(|&i| PicDrift {
+            nominal: nominal(i),
             bound: (w.bounds()[i].x, w.bounds()[i].y),
+            reported: vec![(w.positions()[i].x, w.positions()[i].y)],
         })
         .collect();
-    let mut travelled = vec![start_xy];
-    travelled.extend(&trace.arrivals);
-    let first: Vec<(f64, f64)> = trace
+    // The sensor's snapshots are a function of the seed and the epoch: redraw
+    // them here (at most about 300 per waypoint, evenly spaced, to keep the
+    // picture light).
+    let step = (trace.last_epoch / 300).max(1);
+    let mut epoch = step;
+    while epoch <= trace.last_epoch {
+        world.redraw(epoch);
+        for (d, &i) in drifts.iter_mut().zip(&dynamic) {
+            let p = world.world().positions()[i];
+            d.reported.push((p.x, p.y));
+        }
+        epoch += step;
+    }
+    let waypoints = world
+        .waypoints()
+        .iter()
+        .enumerate()
+        .map(|(i, info)| PicWaypoint {
+            at: nominal(i),
+            label: if info.generated {
+                i.to_string()
+            } else {
+                info.name.clone()
+            },
+            kind: match info.role {
+                crate::mission_file::Role::Start => PicKind::Start,
+                crate::mission_file::Role::Goal => PicKind::Goal,
+                crate::mission_file::Role::Via => PicKind::Via,
+            },
+        })
+        .collect();
+    let first_plan = trace
         .first_plan
         .iter()
         .map(|&i| (start.nodes[i].x, start.nodes[i].y))
         .collect();
-    let routes = [
-        RouteLayer {
-            label: "first plan",
-            points: &first,
-            dashed: true,
-        },
-        RouteLayer {
-            label: "route travelled",
-            points: &travelled,
-            dashed: false,
-        },
+    let (p50, p99, _) = report.latency_us;
+    let summary = vec![
+        format!("outcome: {}", super::log::outcome_name(report.outcome)),
+        format!(
+            "time used: {:.0} of {:.0} s ({:.0} %)",
+            report.time_used_s,
+            report.time_available_s,
+            100.0 * report.time_used_s / report.time_available_s.max(1e-9)
+        ),
+        format!("tasks: {}, weight {:.1}", report.tasks_completed, report.weight),
+        format!("distance: {:.1} km", report.distance_m / 1000.0),
+        format!("plans: {} ({} changed the route)", report.plans, trace.changed_at.len()),
+        format!(
+            "plan latency p50 {:.1} ms, p99 {:.1} ms",
+            p50 as f64 / 1000.0,
+            p99 as f64 / 1000.0
+        ),
+        format!(
+            "deadline misses: {} (deadline {} ms{})",
+            report.deadline_misses,
+            report.deadline_ms,
+            if report.lockstep { ", lockstep" } else { "" }
+        ),
+        format!("seed {}; {} waypoints, {} drifting", world.seed(), w.n(), dynamic.len()),
     ];
-    map_figure(
-        path,
-        &MapFigure {
-            title,
-            map: world.map(),
-            waypoints: &waypoints,
-            start: inst.start,
-            goal: inst.goal,
-            bounds: &bounds,
-            routes: &routes,
-            markers: &trace.replans_at,
-            marker_label: "re-plan",
-        },
-    )?;
+    let pic = Picture {
+        title: format!(
+            "{}, seed {}: {}",
+            world.title(),
+            world.seed(),
+            super::log::outcome_name(report.outcome).replace('_', " ")
+        ),
+        map: world.map(),
+        waypoints,
+        drifts,
+        first_plan,
+        travelled: visits.iter().map(|v| (v.at, v.t)).collect(),
+        changes: trace.changed_at.clone(),
+        budget_s: report.time_available_s,
+        summary,
+    };
+    super::picture::write(stem, &pic)?;
     Ok(())
 }
 
@@ -970,6 +1035,10 @@ fn supervised(
             JournalEvent::Plan { route, .. } => {
                 if trace.first_plan.is_empty() {
                     trace.first_plan = route.clone();
+                } else if changes_route(&trace.last_plan, route) {
+                    // The journal says when, not where: the vehicle takes a
+                    // plan on at a waypoint, its last arrival.
+                    trace.changed_at.extend(trace.arrivals.last().copied());
                 }
                 trace.last_plan = route.clone();
             }
@@ -1135,12 +1204,11 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
     std::fs::write(&report_path, text + "\n").map_err(|e| io_err(&report_path, e))?;
-    let title = format!("Mission, seed {}: {}", world.seed(), super::log::outcome_name(outcome));
     let geojson_path = out.join("route.geojson");
     let visits = journal_visits(&journal, &world);
     let collection = super::route_geojson::route_geojson(&world, &visits);
     std::fs::write(&geojson_path, collection.to_string() + "\n").map_err(|e| io_err(&geojson_path, e))?;
-    plot(&out.join("mission.svg"), &mut world, &trace, &title)?;
+    plot(&out.join("mission"), &mut world, &trace, &visits, &report)?;
     Ok((report, out))
 }
 
@@ -1183,7 +1251,7 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
             if !a.quiet {
                 println!("{}", report.summary());
                 println!(
-                    "wrote {}/report.json, mission.log, mission.svg, route.geojson",
+                    "wrote {}/report.json, mission.log, mission.svg, mission.png, route.geojson",
                     out.display()
                 );
             }

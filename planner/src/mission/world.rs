@@ -134,6 +134,7 @@ pub struct MissionWorld {
     frame: Option<LocalFrame>,
     reserve_s: f64,
     source: String,
+    title: String,
 }
 
 /// Origin of the embedded default chart (its south-west corner), the frame
@@ -170,6 +171,7 @@ pub fn load_world(args: &ScenarioArgs) -> Result<MissionWorld, WorldError> {
     };
     Ok(MissionWorld {
         name: format!("{}-seed-{}", mission_file::slug(&m.name), m.seed),
+        title: m.name.clone(),
         world: m.world,
         water: m.water,
         chart: m.chart,
@@ -206,6 +208,7 @@ fn load_generated(args: &ScenarioArgs) -> Result<MissionWorld, WorldError> {
         .collect();
     Ok(MissionWorld {
         name: format!("mission-seed-{seed}"),
+        title: format!("The paper's model on {chart}"),
         frame: embedded_origin(&cfg.chart),
         world,
         water: Water::Mask(map.mask),
@@ -271,6 +274,11 @@ impl MissionWorld {
     /// The scenario seed.
     pub fn seed(&self) -> u64 {
         self.world.seed()
+    }
+
+    /// The mission's name as its file gives it (for titles).
+    pub fn title(&self) -> &str {
+        &self.title
     }
 
     /// Where the world came from (a file, or the generator).
