@@ -28,6 +28,8 @@ struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
+// Parsed once at start-up: the size of the largest variant does not matter.
+#[allow(clippy::large_enum_variant)]
 enum Command {
     /// Solve an `auv-route-instance/1` file and print its solution.
     Solve(cli::solve::Args),

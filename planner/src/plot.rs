@@ -56,6 +56,18 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(23, 190, 207),
 ];
 
+/// Registers the embedded DejaVu Sans as "sans-serif" (once): plotters built
+/// with `ab_glyph` measures and draws text only with registered fonts, on
+/// every backend.
+pub fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // The embedded font always parses; a failure would surface as a
+        // "font unavailable" drawing error naming the figure.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    });
+}
+
 fn draw_err(path: &Path, e: impl std::fmt::Display) -> PlotError {
     PlotError::Draw {
         path: path.display().to_string(),
@@ -69,6 +81,7 @@ pub fn per_run_figure(path: &Path, title: &str, panels: &[Panel<'_>]) -> Result<
         return Err(PlotError::Empty(path.display().to_string()));
     }
     let height = 60 + 300 * panels.len() as u32;
+    register_font();
     let root = SVGBackend::new(path, (900, height)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(|e| draw_err(path, e))?;
@@ -182,6 +195,7 @@ pub fn map_figure(path: &Path, fig: &MapFigure<'_>) -> Result<(), PlotError> {
     // Keep the chart's aspect ratio: the longer side gets 900 px.
     let scale = 900.0 / w.max(h);
     let size = ((w * scale) as u32 + 110, (h * scale) as u32 + 90);
+    register_font();
     let root = SVGBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
     let mut chart = ChartBuilder::on(&root)
@@ -200,31 +214,10 @@ pub fn map_figure(path: &Path, fig: &MapFigure<'_>) -> Result<(), PlotError> {
         .draw()
         .map_err(|e| draw_err(path, e))?;
     chart.plotting_area().fill(&WATER).map_err(|e| draw_err(path, e))?;
-    // Land as run-length rectangles on a grid of about 250 cells along the
-    // longer side: readable and keeps the SVG small.
     let cell = w.max(h) / 250.0;
-    let (cols, rows) = ((w / cell).ceil() as usize, (h / cell).ceil() as usize);
-    let mut land = Vec::new();
-    for r in 0..rows {
-        let y0 = r as f64 * cell;
-        let yc = (y0 + cell / 2.0).min(h - 1e-9);
-        let mut c = 0;
-        while c < cols {
-            let xc = |c: usize| ((c as f64 + 0.5) * cell).min(w - 1e-9);
-            if fig.map.is_water(xc(c), yc) {
-                c += 1;
-                continue;
-            }
-            let c0 = c;
-            while c < cols && !fig.map.is_water(xc(c), yc) {
-                c += 1;
-            }
-            land.push(Rectangle::new(
-                [(c0 as f64 * cell, y0), ((c as f64 * cell).min(w), (y0 + cell).min(h))],
-                LAND.filled(),
-            ));
-        }
-    }
+    let land = land_cells(fig.map, 250)
+        .into_iter()
+        .map(|r| Rectangle::new(r, LAND.filled()));
     chart.draw_series(land).map_err(|e| draw_err(path, e))?;
 
     let grey = RGBColor(90, 90, 90);
@@ -301,8 +294,36 @@ pub fn map_figure(path: &Path, fig: &MapFigure<'_>) -> Result<(), PlotError> {
     root.present().map_err(|e| draw_err(path, e))
 }
 
+/// Land as run-length rectangles ([(x0, y0), (x1, y1)], m) on a grid of
+/// `cells` cells along the chart's longer side: readable, and keeps an SVG
+/// small.
+pub fn land_cells(map: &dyn WaterMap, cells: usize) -> Vec<[(f64, f64); 2]> {
+    let (w, h) = (map.width_m(), map.height_m());
+    let cell = w.max(h) / cells.max(1) as f64;
+    let (cols, rows) = ((w / cell).ceil() as usize, (h / cell).ceil() as usize);
+    let mut land = Vec::new();
+    for r in 0..rows {
+        let y0 = r as f64 * cell;
+        let yc = (y0 + cell / 2.0).min(h - 1e-9);
+        let mut c = 0;
+        while c < cols {
+            let xc = |c: usize| ((c as f64 + 0.5) * cell).min(w - 1e-9);
+            if map.is_water(xc(c), yc) {
+                c += 1;
+                continue;
+            }
+            let c0 = c;
+            while c < cols && !map.is_water(xc(c), yc) {
+                c += 1;
+            }
+            land.push([(c0 as f64 * cell, y0), ((c as f64 * cell).min(w), (y0 + cell).min(h))]);
+        }
+    }
+    land
+}
+
 /// Splits a polyline into dash segments of about `dash` metres.
-fn dashes(points: &[(f64, f64)], dash: f64) -> Vec<Vec<(f64, f64)>> {
+pub fn dashes(points: &[(f64, f64)], dash: f64) -> Vec<Vec<(f64, f64)>> {
     let mut out = Vec::new();
     for pair in points.windows(2) {
         let (a, b) = (pair[0], pair[1]);

@@ -34,9 +34,11 @@ pub struct ServiceArgs {
     /// Re-plan on a sensor update when the plan's remaining time moves by more than this, s.
     #[arg(long, default_value_t = 120.0)]
     pub replan_threshold_s: f64,
-    /// Time held back from every plan's budget against drifting waypoints, s.
-    #[arg(long, default_value_t = auv_service::core::DEFAULT_RESERVE_S)]
-    pub reserve_s: f64,
+    /// Time held back from every plan's budget against drifting waypoints, s
+    /// [default: the mission file's `vehicle.reserve_s`; 300 on the paper's
+    /// generator].
+    #[arg(long)]
+    pub reserve_s: Option<f64>,
     /// Scale of the expected time lost chasing each drifting waypoint, added
     /// to the plan's edge times (1 = the simulated expectation, 0 = ignore
     /// drift and plan on the reported positions alone).
@@ -121,11 +123,12 @@ impl ServiceArgs {
             self.drift_allowance.to_string(),
             "--replan-threshold-s".into(),
             self.replan_threshold_s.to_string(),
-            "--reserve-s".into(),
-            self.reserve_s.to_string(),
             "--planner-seed".into(),
             self.planner_seed.to_string(),
         ];
+        if let Some(r) = self.reserve_s {
+            f.extend(["--reserve-s".into(), r.to_string()]);
+        }
         if let Some(p) = self.rt_priority {
             f.extend(["--rt-priority".into(), p.to_string()]);
         }
@@ -149,11 +152,9 @@ impl ServiceArgs {
                 self.replan_threshold_s
             )));
         }
-        if !(self.reserve_s.is_finite() && self.reserve_s >= 0.0) {
-            return Err(ServeError::Usage(format!(
-                "--reserve-s {}: must be >= 0",
-                self.reserve_s
-            )));
+        let reserve_s = self.reserve_s.unwrap_or(world.reserve_s());
+        if !(reserve_s.is_finite() && reserve_s >= 0.0) {
+            return Err(ServeError::Usage(format!("--reserve-s {reserve_s}: must be >= 0")));
         }
         self.plan_faults()?;
         if let Some(p) = self.rt_priority.filter(|p| !(0..=99).contains(p)) {
@@ -173,7 +174,7 @@ impl ServiceArgs {
         }
         Ok(ServiceConfig {
             deadline: Duration::from_secs_f64(self.deadline_ms / 1000.0),
-            reserve_s: self.reserve_s,
+            reserve_s,
             iterations: self.iterations,
             replan_threshold_s: self.replan_threshold_s,
             cut_at_deadline: !lockstep,
@@ -363,7 +364,8 @@ mod tests {
     #[test]
     fn the_service_plans_with_auto_unless_told_otherwise() {
         let world = auv_world::load::load_world(&auv_world::load::ScenarioArgs {
-            seed: 1,
+            seed: Some(1),
+            mission: None,
             scenario: None,
             nodes: Some(12),
             time_available_s: None,

@@ -25,15 +25,15 @@ use std::sync::Arc;
 use crate::msg::{ContextCheck, Header, MAX_EDGES, RejectKind, VehicleState, WaypointSnapshot, route_ids};
 use auv_core::problem::{MAX_NODES, NodeSet};
 use auv_world::chart::WaterMap;
-use auv_world::chart::mask::WaterMask;
 use auv_world::load::MissionWorld;
+use auv_world::mission_file::Water;
 use auv_world::scenario::{World, bound_interval};
 
 /// The scenario-dependent checks of one receiver.
 #[derive(Clone, Debug)]
 pub struct WireRules {
     world: World,
-    mask: WaterMask,
+    water: Water,
 }
 
 impl WireRules {
@@ -41,7 +41,7 @@ impl WireRules {
     pub fn new(world: &MissionWorld) -> Self {
         Self {
             world: world.world().clone(),
-            mask: world.map().mask.clone(),
+            water: world.map().clone(),
         }
     }
 
@@ -52,13 +52,13 @@ impl WireRules {
 
     /// Whether (x, y) is navigable water, m.
     pub fn is_water(&self, x: f64, y: f64) -> bool {
-        self.mask.is_water(x, y)
+        self.water.is_water(x, y)
     }
 
     /// Checks waypoint `i` (< n) at `(x, y, z)`: over water first (a
     /// waypoint on land is the worse fault), then inside its bound.
     fn check_node(&self, i: usize, x: f64, y: f64, z: f64) -> Result<(), RejectKind> {
-        if !self.mask.is_water(x, y) {
+        if !self.water.is_water(x, y) {
             return Err(RejectKind::OffWater);
         }
         let nom = self.world.nominal_positions()[i];
@@ -127,7 +127,7 @@ impl WireRules {
                 let (c, r) = (k % GRID, k / GRID);
                 ((c as f64 + 0.5) * w / GRID as f64, (r as f64 + 0.5) * h / GRID as f64)
             })
-            .find(|&(x, y)| !self.mask.is_water(x, y))
+            .find(|&(x, y)| !self.water.is_water(x, y))
     }
 
     /// `check_snapshot` as a [`ContextCheck`] for a guarded inbox.
@@ -502,7 +502,8 @@ mod tests {
 
     fn world(seed: u64) -> MissionWorld {
         load_world(&ScenarioArgs {
-            seed,
+            seed: Some(seed),
+            mission: None,
             scenario: None,
             nodes: Some(16),
             time_available_s: None,

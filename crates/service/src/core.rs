@@ -70,10 +70,7 @@ pub struct ServiceConfig {
     pub warmup_plans: u64,
 }
 
-/// Default planning reserve, s (our choice, measured: lockstep missions on
-/// the default scenario, seeds 1–26, reached the goal 25 times with 300 s
-/// against 23 with none, at about the same weight; 900 s was no safer).
-pub const DEFAULT_RESERVE_S: f64 = 300.0;
+pub use auv_core::problem::DEFAULT_RESERVE_S;
 
 impl Default for ServiceConfig {
     fn default() -> Self {

@@ -42,7 +42,8 @@ fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
     F.get_or_init(|| {
         let args = ScenarioArgs {
-            seed: 11,
+            seed: Some(11),
+            mission: None,
             scenario: None,
             nodes: Some(N),
             time_available_s: None,

@@ -8,20 +8,35 @@
 //! different runs refuse each other's messages. Only sensor-sim moves
 //! waypoints ([`MissionWorld::redraw`], a function of the seed and the epoch
 //! alone); the planner and the vehicle learn the network from its snapshots.
+//!
+//! Where the world comes from: `--mission FILE` (an `auv-mission/1` file,
+//! [`crate::mission_file`]); else, when any of `--seed`, `--scenario`,
+//! `--nodes` is given, the paper's generator with those settings (as before
+//! mission files existed); else the embedded default mission
+//! (`missions/benoits-cove.toml`, the same network as `--seed 1`).
 
 use std::path::PathBuf;
 
-use crate::scenario::{ChartSource, ConfigError, LoadError, RedrawReport, ScenarioConfig, ScenarioMap, World};
+use crate::frame::LocalFrame;
+use crate::mission_file::{self, MissionError, Overrides, Role, Water, WaypointInfo};
+use crate::scenario::{ChartSource, ConfigError, LoadError, RedrawReport, ScenarioConfig, World};
 use auv_core::instance::Instance;
+use auv_core::problem::DEFAULT_RESERVE_S;
 use auv_core::problem::MAX_NODES;
 
 /// How a process picks its world (flags shared by all three binaries).
 #[derive(Clone, Debug, PartialEq, clap::Args)]
 pub struct ScenarioArgs {
-    /// Scenario seed: the same in every process of a run.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Scenario file (`auv-scenario/1`); the defaults when absent.
+    /// Scenario seed: the same in every process of a run (with --mission it
+    /// replaces the file's `seed`) [default: the mission file's, or 1].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Mission file (`auv-mission/1`, TOML) [default: the embedded
+    /// missions/benoits-cove.toml, unless --seed, --scenario or --nodes ask
+    /// for the paper's generator].
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["scenario", "nodes"])]
+    pub mission: Option<PathBuf>,
+    /// Scenario file (`auv-scenario/1`, the paper's generator's settings).
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
     /// Override the number of waypoints (2..=128; dynamic ones are capped at n − 2).
@@ -35,7 +50,16 @@ pub struct ScenarioArgs {
 impl ScenarioArgs {
     /// The flags that rebuild this world in a child process.
     pub fn to_flags(&self) -> Vec<String> {
-        let mut v = vec!["--seed".to_string(), self.seed.to_string()];
+        let mut v = Vec::new();
+        if let Some(seed) = self.seed {
+            v.extend(["--seed".to_string(), seed.to_string()]);
+        }
+        if let Some(p) = &self.mission {
+            // Absolute, so a child started in another folder finds it.
+            let p = std::path::absolute(p).unwrap_or_else(|_| p.clone());
+            v.push("--mission".into());
+            v.push(p.display().to_string());
+        }
         if let Some(p) = &self.scenario {
             v.push("--scenario".into());
             v.push(p.display().to_string());
@@ -51,7 +75,18 @@ impl ScenarioArgs {
         v
     }
 
-    /// The scenario configuration these flags describe.
+    /// Whether these flags ask for the paper's generator rather than a
+    /// mission file.
+    pub fn uses_generator(&self) -> bool {
+        self.mission.is_none() && (self.seed.is_some() || self.scenario.is_some() || self.nodes.is_some())
+    }
+
+    /// The scenario seed of the generator path (1 when not given).
+    pub fn generator_seed(&self) -> u64 {
+        self.seed.unwrap_or(1)
+    }
+
+    /// The scenario configuration these flags describe (generator path).
     pub fn config(&self) -> Result<ScenarioConfig, WorldError> {
         let mut cfg = match &self.scenario {
             Some(p) => ScenarioConfig::from_file(p)?,
@@ -84,30 +119,106 @@ pub enum WorldError {
     /// The chart or the generator failed.
     #[error("scenario: {0}")]
     Load(#[from] LoadError),
+    /// A mission file that cannot be run.
+    #[error("mission file {0}")]
+    Mission(#[from] MissionError),
 }
 
 /// A scenario world with its chart.
 pub struct MissionWorld {
     world: World,
-    map: ScenarioMap,
+    water: Water,
     chart: String,
     name: String,
+    waypoints: Vec<WaypointInfo>,
+    frame: Option<LocalFrame>,
+    reserve_s: f64,
+    source: String,
+    title: String,
 }
 
-/// Builds the world the flags name (chart loaded and classified by
-/// [`crate::scenario::load_world`], the one place that does it).
+/// Origin of the embedded default chart (its south-west corner), the frame
+/// of generator worlds on it.
+fn embedded_origin(chart: &ChartSource) -> Option<LocalFrame> {
+    match chart {
+        ChartSource::Embedded(name) if name == crate::scenario::EMBEDDED_CHART_NAME => {
+            LocalFrame::new(crate::frame::LatLon {
+                lat: 48.990,
+                lon: -58.1700,
+            })
+            .ok()
+        }
+        _ => None,
+    }
+}
+
+/// Builds the world the flags name: a mission file, the generator, or the
+/// embedded default mission (see the module doc).
 pub fn load_world(args: &ScenarioArgs) -> Result<MissionWorld, WorldError> {
-    let cfg = args.config()?;
-    let (world, map) = crate::scenario::load_world(&cfg, args.seed)?;
-    let chart = match &cfg.chart {
-        ChartSource::Embedded(name) => name.clone(),
-        ChartSource::Png { path, .. } => path.display().to_string(),
+    if args.uses_generator() {
+        return load_generated(args);
+    }
+    let overrides = Overrides {
+        seed: args.seed,
+        time_available_s: args.time_available_s,
+    };
+    let (m, source) = match &args.mission {
+        Some(path) => (mission_file::load(path, overrides)?, path.display().to_string()),
+        None => (
+            mission_file::load_default(overrides)?,
+            mission_file::DEFAULT_MISSION_NAME.to_string(),
+        ),
     };
     Ok(MissionWorld {
-        name: format!("mission-seed-{}", args.seed),
+        name: format!("{}-seed-{}", mission_file::slug(&m.name), m.seed),
+        title: m.name.clone(),
+        world: m.world,
+        water: m.water,
+        chart: m.chart,
+        waypoints: m.waypoints,
+        frame: m.frame,
+        reserve_s: m.reserve_s,
+        source,
+    })
+}
+
+/// The paper's generator (chart loaded and classified by
+/// [`crate::scenario::load_world`], the one place that does it).
+fn load_generated(args: &ScenarioArgs) -> Result<MissionWorld, WorldError> {
+    let cfg = args.config()?;
+    let seed = args.generator_seed();
+    let (world, map) = crate::scenario::load_world(&cfg, seed)?;
+    let chart = match &cfg.chart {
+        ChartSource::Embedded(name) => name.clone(),
+        ChartSource::Png { path, .. } | ChartSource::LandGeojson { path, .. } => path.display().to_string(),
+    };
+    let n = world.n();
+    let waypoints = (0..n)
+        .map(|i| WaypointInfo {
+            name: i.to_string(),
+            role: if i == 0 {
+                Role::Start
+            } else if i == n - 1 {
+                Role::Goal
+            } else {
+                Role::Via
+            },
+            generated: i != 0 && i != n - 1,
+        })
+        .collect();
+    Ok(MissionWorld {
+        name: format!("mission-seed-{seed}"),
+        title: format!("The paper's model on {chart}"),
+        frame: embedded_origin(&cfg.chart),
         world,
-        map,
+        water: Water::Mask(map.mask),
         chart,
+        waypoints,
+        reserve_s: DEFAULT_RESERVE_S,
+        source: match &args.scenario {
+            Some(p) => p.display().to_string(),
+            None => "the paper's generator".into(),
+        },
     })
 }
 
@@ -121,12 +232,12 @@ impl MissionWorld {
     /// depends on the seed and the epoch only.
     pub fn redraw(&mut self, epoch: u64) -> RedrawReport {
         let mut rng = self.world.redraw_rng(epoch);
-        self.world.redraw_dynamic(&mut rng, &self.map)
+        self.world.redraw_dynamic(&mut rng, &self.water)
     }
 
     /// Expected time lost reaching each drifting waypoint, s, by node id.
     pub fn arrival_allowances_s(&self) -> [f64; auv_core::problem::MAX_NODES] {
-        self.world.arrival_allowances_s(&self.map)
+        self.world.arrival_allowances_s(&self.water)
     }
 
     /// The network as it stands.
@@ -139,9 +250,40 @@ impl MissionWorld {
         &self.world
     }
 
-    /// The chart and its water mask.
-    pub fn map(&self) -> &ScenarioMap {
-        &self.map
+    /// Where water is (the chart's mask or its land polygons).
+    pub fn map(&self) -> &Water {
+        &self.water
+    }
+
+    /// The waypoints' names and roles, by node id.
+    pub fn waypoints(&self) -> &[WaypointInfo] {
+        &self.waypoints
+    }
+
+    /// The lat/lon frame, when the mission has an origin.
+    pub fn frame(&self) -> Option<&LocalFrame> {
+        self.frame.as_ref()
+    }
+
+    /// The reserve held back from every plan unless `--reserve-s` says
+    /// otherwise, s: the mission file's, or the service default.
+    pub fn reserve_s(&self) -> f64 {
+        self.reserve_s
+    }
+
+    /// The scenario seed.
+    pub fn seed(&self) -> u64 {
+        self.world.seed()
+    }
+
+    /// The mission's name as its file gives it (for titles).
+    pub fn title(&self) -> &str {
+        &self.title
+    }
+
+    /// Where the world came from (a file, or the generator).
+    pub fn source(&self) -> &str {
+        &self.source
     }
 
     /// Mission time between sensor updates, s (from the scenario).
@@ -167,7 +309,8 @@ mod tests {
 
     fn args(seed: u64, nodes: usize) -> ScenarioArgs {
         ScenarioArgs {
-            seed,
+            seed: Some(seed),
+            mission: None,
             scenario: None,
             nodes: Some(nodes),
             time_available_s: None,
@@ -197,7 +340,8 @@ mod tests {
     #[test]
     fn flags_round_trip_and_bad_values_are_errors() {
         let a = ScenarioArgs {
-            seed: 9,
+            seed: Some(9),
+            mission: None,
             scenario: None,
             nodes: Some(20),
             time_available_s: Some(9000.0),

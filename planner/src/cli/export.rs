@@ -1,13 +1,15 @@
 //! `planner export`: write the current snapshot of a scenario as an
 //! `auv-route-instance/1` file, so it can be re-solved here or elsewhere.
 //!
-//! Contract: the scenario is the default one ([`ScenarioConfig::default`],
-//! the embedded Benoit's Cove chart) or the `auv-scenario/1` file given with
-//! `--scenario`; together with `--seed` it fixes the world bit for bit
-//! ([`auv_world::scenario::load_world`]). The snapshot is the world as
-//! generated (time 0), named `<chart>-seed-<S>-t0`. The file written reads
-//! back through [`Instance::from_json`] to the same instance (checked before
-//! it is written).
+//! Contract: the world is a mission file (`--mission FILE`, `auv-mission/1`,
+//! node ids as the format orders them; `--seed` replaces the file's seed), or
+//! the paper's generator (`--seed`, `--scenario`: the `auv-scenario/1` file,
+//! defaults otherwise; [`auv_world::scenario::load_world`]), or with neither
+//! the embedded default mission; either fixes the world bit for bit. The
+//! snapshot is the world at time 0, named `<chart>-seed-<S>-t0` (generator)
+//! or `<mission name>-seed-<S>-t0`. The file written reads back through
+//! [`Instance::from_json`] to the same instance (checked before it is
+//! written).
 
 use std::path::{Path, PathBuf};
 
@@ -19,13 +21,18 @@ use super::{CliError, check_json, print, read_text, write_text};
 /// Arguments of `planner export`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Scenario seed: with the scenario it fixes the waypoints, tasks and edges.
+    /// Scenario seed: with the scenario it fixes the waypoints, tasks and
+    /// edges (with --mission it replaces the file's seed).
     #[arg(long, allow_negative_numbers = true)]
-    pub seed: u64,
+    pub seed: Option<u64>,
     /// Scenario file (`auv-scenario/1` JSON; absent fields take their
     /// defaults) [default: the built-in scenario on the embedded chart].
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
+    /// Mission file (`auv-mission/1`) [default without --seed and
+    /// --scenario: the embedded default mission].
+    #[arg(long, value_name = "FILE", conflicts_with = "scenario")]
+    pub mission: Option<PathBuf>,
     /// Where to write the instance JSON.
     #[arg(long, value_name = "FILE.json")]
     pub out: PathBuf,
@@ -47,7 +54,7 @@ pub fn load_scenario(path: &Path) -> Result<ScenarioConfig, CliError> {
 pub fn snapshot_name(config: &ScenarioConfig, seed: u64) -> String {
     let chart = match &config.chart {
         ChartSource::Embedded(name) => name.clone(),
-        ChartSource::Png { path, .. } => path
+        ChartSource::Png { path, .. } | ChartSource::LandGeojson { path, .. } => path
             .file_stem()
             .map_or_else(|| EMBEDDED_CHART_NAME.to_string(), |s| s.to_string_lossy().into_owned()),
     };
@@ -56,12 +63,28 @@ pub fn snapshot_name(config: &ScenarioConfig, seed: u64) -> String {
 
 /// Runs `planner export`.
 pub fn run(args: Args) -> Result<(), CliError> {
-    let (config, origin) = match &args.scenario {
-        Some(path) => (load_scenario(path)?, path.display().to_string()),
-        None => (ScenarioConfig::default(), "default scenario".to_string()),
+    let (world, inst) = if args.mission.is_some() || (args.seed.is_none() && args.scenario.is_none()) {
+        let overrides = auv_world::mission_file::Overrides {
+            seed: args.seed,
+            time_available_s: None,
+        };
+        let m = match &args.mission {
+            Some(path) => auv_world::mission_file::load(path, overrides)?,
+            None => auv_world::mission_file::load_default(overrides)?,
+        };
+        let name = format!("{}-seed-{}-t0", auv_world::mission_file::slug(&m.name), m.seed);
+        let inst = m.world.snapshot(&name);
+        (m.world, inst)
+    } else {
+        let seed = args.seed.unwrap_or(super::DEFAULT_SEED);
+        let (config, origin) = match &args.scenario {
+            Some(path) => (load_scenario(path)?, path.display().to_string()),
+            None => (ScenarioConfig::default(), "default scenario".to_string()),
+        };
+        let (world, _map) = load_world(&config, seed).map_err(|source| CliError::World { origin, source })?;
+        let inst = world.snapshot(&snapshot_name(&config, seed));
+        (world, inst)
     };
-    let (world, _map) = load_world(&config, args.seed).map_err(|source| CliError::World { origin, source })?;
-    let inst = world.snapshot(&snapshot_name(&config, args.seed));
     let text = inst.to_json();
     match Instance::from_json(&text) {
         Ok(back) if back == inst => {}

@@ -99,6 +99,9 @@ pub enum CliError {
         /// What is wrong.
         source: LoadError,
     },
+    /// A mission file that cannot be run.
+    #[error(transparent)]
+    Mission(#[from] auv_world::mission_file::MissionError),
     /// Arguments that parse but do not fit together.
     #[error("{0}")]
     Usage(String),

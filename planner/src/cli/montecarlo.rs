@@ -25,12 +25,17 @@ pub struct Args {
     /// Waypoints in the network (overrides the scenario's `nodes`).
     #[arg(long)]
     pub nodes: Option<usize>,
-    /// Seed of the world and of every solver stream.
-    #[arg(long, default_value_t = DEFAULT_SEED)]
-    pub seed: u64,
+    /// Seed of the world and of every solver stream [default: 1, or the
+    /// mission file's seed].
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Scenario file (`auv-scenario/1`) [default: the built-in scenario].
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
+    /// Mission file (`auv-mission/1`): its network, dynamic waypoints
+    /// redrawn each run by the file's drift model.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["scenario", "nodes"])]
+    pub mission: Option<PathBuf>,
     /// Algorithms to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "pso,bbo")]
     pub algorithms: Vec<Algorithm>,
@@ -47,6 +52,16 @@ pub struct Args {
 
 /// Runs `planner montecarlo`.
 pub fn run(args: Args) -> Result<(), CliError> {
+    let mission = match &args.mission {
+        Some(path) => Some(auv_world::mission_file::load(
+            path,
+            auv_world::mission_file::Overrides {
+                seed: args.seed,
+                time_available_s: None,
+            },
+        )?),
+        None => None,
+    };
     let (mut config, origin) = match &args.scenario {
         Some(path) => (load_scenario(path)?, path.display().to_string()),
         None => (ScenarioConfig::default(), "default scenario".to_string()),
@@ -57,6 +72,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .validate()
             .map_err(|e| CliError::Usage(format!("--nodes {nodes}: {e}")))?;
     }
+    let seed = mission.as_ref().map_or(args.seed.unwrap_or(DEFAULT_SEED), |m| m.seed);
     let mut algorithms = args.algorithms.clone();
     algorithms.dedup();
     if algorithms.is_empty() {
@@ -68,7 +84,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         path: args.out.clone(),
         source,
     })?;
-    let (world, map) = load_world(&config, args.seed).map_err(|source| CliError::World { origin, source })?;
+    let (world, map, chart_name) = match mission {
+        Some(m) => (m.world, m.water, m.chart),
+        None => {
+            let (world, map) = load_world(&config, seed).map_err(|source| CliError::World { origin, source })?;
+            (
+                world,
+                auv_world::mission_file::Water::Mask(map.mask),
+                map.chart.name().to_string(),
+            )
+        }
+    };
 
     let specs: Vec<AlgorithmSpec> = algorithms
         .iter()
@@ -89,11 +115,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
         "montecarlo: {} runs × {} on {} ({} waypoints, {} dynamic, {} edges), seed {}, {} threads",
         args.runs,
         algorithms.iter().map(|a| a.as_str()).collect::<Vec<_>>().join("+"),
-        map.chart.name(),
+        chart_name,
         world.n(),
         world.dynamic_nodes().len(),
         world.edge_count(),
-        args.seed,
+        seed,
         threads
     );
     let bar = indicatif::ProgressBar::new(u64::from(args.runs));
@@ -104,7 +130,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     );
     let settings = StudySettings {
         runs: args.runs as usize,
-        seed: args.seed,
+        seed,
         threads,
     };
     let records = montecarlo::run_study(&world, &map, settings, &specs, &|| bar.inc(1))
@@ -115,7 +141,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut text = format!(
         "Monte Carlo study: {} runs, seed {}, {} waypoints (scenario fingerprint {:016x})\n\n",
         args.runs,
-        args.seed,
+        seed,
         world.n(),
         world.fingerprint()
     );

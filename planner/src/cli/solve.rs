@@ -70,8 +70,12 @@ impl AlgorithmArg {
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Instance file in the `auv-route-instance/1` format.
-    #[arg(long, value_name = "FILE")]
-    pub instance: PathBuf,
+    #[arg(long, value_name = "FILE", required_unless_present = "mission")]
+    pub instance: Option<PathBuf>,
+    /// Or a mission file (`auv-mission/1`): solves its first snapshot, the
+    /// one `planner export --mission FILE` writes.
+    #[arg(long, value_name = "FILE", conflicts_with = "instance")]
+    pub mission: Option<PathBuf>,
     /// Solver to run.
     #[arg(long, value_enum, default_value_t = AlgorithmArg::Auto)]
     pub algorithm: AlgorithmArg,
@@ -116,13 +120,20 @@ fn parse_time_limit(text: &str) -> Result<Duration, CliError> {
 
 /// Runs `planner solve`.
 pub fn run(args: Args) -> Result<(), CliError> {
-    let inst = load_instance(&args.instance)?;
+    let (inst, path) = match (&args.instance, &args.mission) {
+        (Some(path), _) => (load_instance(path)?, path.clone()),
+        (None, Some(path)) => {
+            let m = auv_world::mission_file::load(path, auv_world::mission_file::Overrides::default())?;
+            (m.world.snapshot(&m.name), path.clone())
+        }
+        (None, None) => return Err(CliError::Usage("give --instance FILE or --mission FILE".into())),
+    };
     let problem = Problem::from_instance(&inst).map_err(|source| CliError::Problem {
-        path: args.instance.clone(),
+        path: path.clone(),
         source,
     })?;
     let Some((mut solver, iterations)) = args.algorithm.build(args.iterations, args.deadline_ms.is_some()) else {
-        return run_exact(&args, &inst, &problem);
+        return run_exact(&args, &path, &inst, &problem);
     };
     if let Some(t) = &args.time_limit {
         return Err(CliError::Usage(format!(
@@ -169,7 +180,12 @@ struct ExactSolution<'a> {
 }
 
 /// `planner solve --algorithm exact`.
-fn run_exact(args: &Args, inst: &auv_core::instance::Instance, problem: &Problem) -> Result<(), CliError> {
+fn run_exact(
+    args: &Args,
+    path: &std::path::Path,
+    inst: &auv_core::instance::Instance,
+    problem: &Problem,
+) -> Result<(), CliError> {
     // Check every argument before the (possibly long) search.
     let time_limit = args.time_limit.as_deref().map(parse_time_limit).transpose()?;
     if let Some(d) = args.deadline_ms {
@@ -186,8 +202,8 @@ fn run_exact(args: &Args, inst: &auv_core::instance::Instance, problem: &Problem
         time_limit,
         ..ExactSettings::default()
     };
-    let out = solve_exact(problem, &settings)
-        .map_err(|e| CliError::Usage(format!("{}: exact: {e}", args.instance.display())))?;
+    let out =
+        solve_exact(problem, &settings).map_err(|e| CliError::Usage(format!("{}: exact: {e}", path.display())))?;
     let route = out.route.to_vec();
     let outcome = SolveOutcome {
         iterations: u32::try_from(out.nodes_explored).unwrap_or(u32::MAX),

@@ -29,7 +29,7 @@ use super::report::Report;
 use super::supervise::{
     FaultKind, FaultReport, LATEST_INJECTION, LivenessEvent, Monitor, PlannerTotals, Proc, plan_faults,
 };
-use crate::plot::{BoundMarker, MapFigure, PlotError, RouteLayer, map_figure};
+use crate::plot::PlotError;
 use crate::serve::{ServeError, ServiceArgs, make_solver, open_ports, prepare_service_thread};
 use auv_messages::journal::{JournalEvent, JournalSummary};
 use auv_messages::msg::{Outcome, RejectCounters, VehicleState};
@@ -100,6 +100,10 @@ pub struct MissionArgs {
     /// Tests: passed to vehicle-sim as `--inject` (bad vehicle states next to good ones).
     #[arg(long, value_name = "KIND[,KIND…]")]
     pub inject_vehicle: Option<String>,
+    /// Print the embedded default mission file (`auv-mission/1`) and exit:
+    /// a starting point for your own.
+    #[arg(long)]
+    pub print_default: bool,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub external: ExternalArgs,
@@ -368,6 +372,9 @@ fn fresh_out_dir(seed: u64) -> PathBuf {
 struct Trace {
     arrivals: Vec<(f64, f64)>,
     replans_at: Vec<(f64, f64)>,
+    /// Where a re-plan changed the route (a re-plan that confirms the plan
+    /// in force is not drawn).
+    changed_at: Vec<(f64, f64)>,
     first_plan: Vec<usize>,
     last_plan: Vec<usize>,
     last_epoch: u64,
@@ -382,6 +389,9 @@ impl Trace {
                     self.first_plan = route.to_vec();
                 } else {
                     self.replans_at.push(at);
+                    if changes_route(&self.last_plan, &route.to_vec()) {
+                        self.changed_at.push(at);
+                    }
                 }
                 self.last_plan = route.to_vec();
             }
@@ -391,56 +401,115 @@ impl Trace {
     }
 }
 
-fn plot(path: &Path, world: &mut MissionWorld, trace: &Trace, title: &str) -> Result<(), MissionError> {
-    let start = world.snapshot();
-    let start_xy = (start.nodes[start.start].x, start.nodes[start.start].y);
-    if trace.last_epoch > 0 {
-        world.redraw(trace.last_epoch);
+/// Whether plan `new` changes the route of plan `old`: a plan that is the
+/// rest of the old one from where the vehicle now is (it only dropped the
+/// waypoints already passed) changes nothing.
+fn changes_route(old: &[usize], new: &[usize]) -> bool {
+    match new.first().and_then(|&here| old.iter().position(|&i| i == here)) {
+        Some(k) => old[k..] != *new,
+        None => true,
     }
-    let inst = world.snapshot();
-    let w = world.world();
-    let waypoints: Vec<(f64, f64)> = inst.nodes.iter().map(|n| (n.x, n.y)).collect();
-    let bounds: Vec<BoundMarker> = w
-        .dynamic_nodes()
+}
+
+/// Draws `mission.svg` and `mission.png` (see [`super::picture`]).
+fn plot(
+    stem: &Path,
+    world: &mut MissionWorld,
+    trace: &Trace,
+    visits: &[super::route_geojson::Visit],
+    report: &Report,
+) -> Result<(), MissionError> {
+    use super::picture::{PicDrift, PicKind, PicWaypoint, Picture};
+    let start = world.snapshot();
+    let w = world.world().clone();
+    let nominal = |i: usize| (w.nominal_positions()[i].x, w.nominal_positions()[i].y);
+    let dynamic: Vec<usize> = w.dynamic_nodes().iter().collect();
+    let mut drifts: Vec<PicDrift> = dynamic
         .iter()
-        .map(|i| BoundMarker {
-            nominal: (w.nominal_positions()[i].x, w.nominal_positions()[i].y),
+        .map(|&i| PicDrift {
+            nominal: nominal(i),
             bound: (w.bounds()[i].x, w.bounds()[i].y),
+            reported: vec![(w.positions()[i].x, w.positions()[i].y)],
         })
         .collect();
-    let mut travelled = vec![start_xy];
-    travelled.extend(&trace.arrivals);
-    let first: Vec<(f64, f64)> = trace
+    // The sensor's snapshots are a function of the seed and the epoch: redraw
+    // them here (at most about 300 per waypoint, evenly spaced, to keep the
+    // picture light).
+    let step = (trace.last_epoch / 300).max(1);
+    let mut epoch = step;
+    while epoch <= trace.last_epoch {
+        world.redraw(epoch);
+        for (d, &i) in drifts.iter_mut().zip(&dynamic) {
+            let p = world.world().positions()[i];
+            d.reported.push((p.x, p.y));
+        }
+        epoch += step;
+    }
+    let waypoints = world
+        .waypoints()
+        .iter()
+        .enumerate()
+        .map(|(i, info)| PicWaypoint {
+            at: nominal(i),
+            label: if info.generated {
+                i.to_string()
+            } else {
+                info.name.clone()
+            },
+            kind: match info.role {
+                auv_world::mission_file::Role::Start => PicKind::Start,
+                auv_world::mission_file::Role::Goal => PicKind::Goal,
+                auv_world::mission_file::Role::Via => PicKind::Via,
+            },
+        })
+        .collect();
+    let first_plan = trace
         .first_plan
         .iter()
         .map(|&i| (start.nodes[i].x, start.nodes[i].y))
         .collect();
-    let routes = [
-        RouteLayer {
-            label: "first plan",
-            points: &first,
-            dashed: true,
-        },
-        RouteLayer {
-            label: "route travelled",
-            points: &travelled,
-            dashed: false,
-        },
+    let (p50, p99, _) = report.latency_us;
+    let summary = vec![
+        format!("outcome: {}", auv_messages::msg::outcome_name(report.outcome)),
+        format!(
+            "time used: {:.0} of {:.0} s ({:.0} %)",
+            report.time_used_s,
+            report.time_available_s,
+            100.0 * report.time_used_s / report.time_available_s.max(1e-9)
+        ),
+        format!("tasks: {}, weight {:.1}", report.tasks_completed, report.weight),
+        format!("distance: {:.1} km", report.distance_m / 1000.0),
+        format!("plans: {} ({} changed the route)", report.plans, trace.changed_at.len()),
+        format!(
+            "plan latency p50 {:.1} ms, p99 {:.1} ms",
+            p50 as f64 / 1000.0,
+            p99 as f64 / 1000.0
+        ),
+        format!(
+            "deadline misses: {} (deadline {} ms{})",
+            report.deadline_misses,
+            report.deadline_ms,
+            if report.lockstep { ", lockstep" } else { "" }
+        ),
+        format!("seed {}; {} waypoints, {} drifting", world.seed(), w.n(), dynamic.len()),
     ];
-    map_figure(
-        path,
-        &MapFigure {
-            title,
-            map: world.map(),
-            waypoints: &waypoints,
-            start: inst.start,
-            goal: inst.goal,
-            bounds: &bounds,
-            routes: &routes,
-            markers: &trace.replans_at,
-            marker_label: "re-plan",
-        },
-    )?;
+    let pic = Picture {
+        title: format!(
+            "{}, seed {}: {}",
+            world.title(),
+            world.seed(),
+            auv_messages::msg::outcome_name(report.outcome).replace('_', " ")
+        ),
+        map: world.map(),
+        waypoints,
+        drifts,
+        first_plan,
+        travelled: visits.iter().map(|v| (v.at, v.t)).collect(),
+        changes: trace.changed_at.clone(),
+        budget_s: report.time_available_s,
+        summary,
+    };
+    super::picture::write(stem, &pic)?;
     Ok(())
 }
 
@@ -467,6 +536,8 @@ struct Launch<'a> {
     vehicle_args: &'a [String],
     /// Mission time budget, s.
     budget: f64,
+    /// The scenario seed (the default fault seed).
+    seed: u64,
 }
 
 /// Runs the mission with the service on a thread of this process.
@@ -701,7 +772,7 @@ fn supervised(
         Kid::spawn("sensor-sim", l.sensor_args, out)?,
         Kid::spawn("vehicle-sim", vehicle_args, out)?,
     ];
-    let fault_seed = a.fault_seed.unwrap_or(a.scenario.seed);
+    let fault_seed = a.fault_seed.unwrap_or(l.seed);
     let faults = plan_faults(fault_seed, a.faults, budget, &Proc::ALL);
     let mut report = FaultReport {
         planned: faults.clone(),
@@ -948,6 +1019,10 @@ fn supervised(
             JournalEvent::Plan { route, .. } => {
                 if trace.first_plan.is_empty() {
                     trace.first_plan = route.clone();
+                } else if changes_route(&trace.last_plan, route) {
+                    // The journal says when, not where: the vehicle takes a
+                    // plan on at a waypoint, its last arrival.
+                    trace.changed_at.extend(trace.arrivals.last().copied());
                 }
                 trace.last_plan = route.clone();
             }
@@ -1008,7 +1083,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let rules = Arc::new(WireRules::new(&world));
     let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
     let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
-    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(a.scenario.seed));
+    let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(world.seed()));
     std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
     signal::install();
     cleanup_dead_nodes(&domain_config(&prefix)?);
@@ -1049,6 +1124,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         sensor_args: &sensor_args,
         vehicle_args: &vehicle_args,
         budget,
+        seed: world.seed(),
     };
     if a.external.any() {
         announce(a.external, &prefix, &a.vehicle, fingerprint, a.lockstep, &out);
@@ -1097,7 +1173,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         rejected: c.rejected,
         rejected_vehicle,
         stale_plans,
-        seed: a.scenario.seed,
+        seed: world.seed(),
         planner_seed: a.service.planner_seed,
         fingerprint,
         scenario: world.describe(),
@@ -1116,23 +1192,56 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let report_path = out.join("report.json");
     let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
     std::fs::write(&report_path, text + "\n").map_err(|e| io_err(&report_path, e))?;
-    let title = format!(
-        "Mission, seed {}: {}",
-        a.scenario.seed,
-        auv_messages::msg::outcome_name(outcome)
-    );
-    plot(&out.join("mission.svg"), &mut world, &trace, &title)?;
+    let geojson_path = out.join("route.geojson");
+    let visits = journal_visits(&journal, &world);
+    let collection = super::route_geojson::route_geojson(&world, &visits);
+    std::fs::write(&geojson_path, collection.to_string() + "\n").map_err(|e| io_err(&geojson_path, e))?;
+    plot(&out.join("mission"), &mut world, &trace, &visits, &report)?;
     Ok((report, out))
+}
+
+/// Where the vehicle was, in order, from its journal: the start (at its
+/// nominal position), then every arrival.
+fn journal_visits(journal: &JournalSummary, world: &MissionWorld) -> Vec<super::route_geojson::Visit> {
+    use super::route_geojson::Visit;
+    let w = world.world();
+    let mut visits = Vec::new();
+    for e in &journal.events {
+        match e {
+            JournalEvent::Start { t, node, .. } if visits.is_empty() => {
+                let p = w.nominal_positions().get(*node).copied().unwrap_or_default();
+                visits.push(Visit {
+                    t: *t,
+                    node: *node,
+                    at: (p.x, p.y),
+                });
+            }
+            JournalEvent::Arrival { t, node, pos, .. } => visits.push(Visit {
+                t: *t,
+                node: *node,
+                at: (pos[0], pos[1]),
+            }),
+            _ => {}
+        }
+    }
+    visits
 }
 
 /// Runs `planner mission`: 0 when the mission ran to its end (goal or time
 /// out: see the report), 1 on an error, 2 on bad arguments, 130 when stopped.
 pub fn run_mission(a: &MissionArgs) -> ExitCode {
+    if a.print_default {
+        print!("{}", auv_world::mission_file::DEFAULT_MISSION_TOML);
+        return ExitCode::SUCCESS;
+    }
     match mission(a) {
         Ok((report, out)) => {
             if !a.quiet {
                 println!("{}", report.summary());
-                println!("wrote {}/report.json, mission.log, mission.svg", out.display());
+                println!(
+                    "wrote {}/report.json, mission.log, mission.svg, mission.png, route.geojson",
+                    out.display()
+                );
             }
             if report.outcome == Outcome::Aborted {
                 ExitCode::from(130)
@@ -1140,7 +1249,9 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
                 ExitCode::SUCCESS
             }
         }
-        Err(e @ MissionError::Usage(_)) => {
+        // A world that cannot be built is bad input (a file or a flag),
+        // refused before any process starts.
+        Err(e @ (MissionError::Usage(_) | MissionError::World(_))) => {
             eprintln!("planner: error: {e}");
             ExitCode::from(2)
         }

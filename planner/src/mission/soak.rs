@@ -49,9 +49,14 @@ pub struct SoakArgs {
     /// Output folder (soak.json and one folder per mission).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Waypoints per scenario.
+    /// Waypoints per scenario (the paper's generator; not with --mission).
     #[arg(long, default_value_t = 12)]
     pub nodes: usize,
+    /// Run this mission file (`auv-mission/1`) every time, mission k with
+    /// seed `seed + k` in place of the file's (its drift, generated
+    /// waypoints and drawn tasks change; the written waypoints do not).
+    #[arg(long, value_name = "FILE")]
+    pub mission: Option<PathBuf>,
     /// Mission seconds per real second.
     #[arg(long, default_value_t = 3000.0)]
     pub time_scale: f64,
@@ -101,8 +106,6 @@ fn mission_args(a: &SoakArgs, k: u32, prefix: &str) -> Result<MissionArgs, Strin
         (a.seed + u64::from(k)).to_string(),
         "--planner-seed".into(),
         a.seed.to_string(),
-        "--nodes".into(),
-        a.nodes.to_string(),
         "--out".into(),
         out.display().to_string(),
         "--ipc-prefix".into(),
@@ -110,6 +113,10 @@ fn mission_args(a: &SoakArgs, k: u32, prefix: &str) -> Result<MissionArgs, Strin
         "--stall-timeout-ms".into(),
         a.stall_timeout_ms.to_string(),
     ]);
+    match &a.mission {
+        Some(file) => argv.extend(["--mission".into(), file.display().to_string()]),
+        None => argv.extend(["--nodes".into(), a.nodes.to_string()]),
+    }
     if a.lockstep {
         argv.push("--lockstep".into());
     } else {
@@ -203,7 +210,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                 add(&mut stalls, &f["stalls_detected"]);
                 json!({
                     "mission": k,
-                    "seed": m.scenario.seed,
+                    "seed": m.scenario.seed.unwrap_or(1),
                     "outcome": j["outcome"],
                     "tasks": r.tasks_completed,
                     "weight": r.weight,
@@ -221,7 +228,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                     "wall_s": t0.elapsed().as_secs_f64(),
                 })
             }
-            Err(e) => json!({"mission": k, "seed": m.scenario.seed, "error": e.to_string()}),
+            Err(e) => json!({"mission": k, "seed": m.scenario.seed.unwrap_or(1), "error": e.to_string()}),
         };
         let rss_now = rss_kb_of(me).unwrap_or(0);
         rss_self.push(rss_now);

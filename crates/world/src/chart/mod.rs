@@ -39,6 +39,7 @@ pub trait WaterMap {
 pub mod classify;
 pub mod image;
 pub mod kmeans;
+pub mod land;
 pub mod mask;
 
 use std::path::{Path, PathBuf};

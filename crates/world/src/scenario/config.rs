@@ -48,6 +48,15 @@ pub enum ChartSource {
         /// Ground size of one pixel, m.
         metres_per_pixel: f64,
     },
+    /// GeoJSON land polygons (lon/lat) over an operating area. Only a mission
+    /// file (`auv-mission/1`) names one: its polygons need the mission's
+    /// lat/lon frame, which a scenario file does not have.
+    LandGeojson {
+        /// Path to the GeoJSON file.
+        path: PathBuf,
+        /// The operating area, m: x east, y north from the frame origin.
+        extent_m: [f64; 2],
+    },
 }
 
 /// A closed interval [lo, hi] that a uniform draw U(lo, hi) comes from.
@@ -301,7 +310,7 @@ impl ScenarioConfig {
                 *metres_per_pixel > 0.0,
                 "finite and > 0",
             )?,
-            ChartSource::Embedded(_) => {}
+            ChartSource::Embedded(_) | ChartSource::LandGeojson { .. } => {}
         }
         if !(2..=MAX_K).contains(&self.k) {
             return Err(bad("k", self.k as f64, "an integer in 2..=16"));
@@ -385,6 +394,9 @@ impl ScenarioConfig {
             ChartSource::Embedded(name) => json!(name),
             ChartSource::Png { path, metres_per_pixel } => {
                 json!({"png": path.to_string_lossy(), "metres_per_pixel": metres_per_pixel})
+            }
+            ChartSource::LandGeojson { path, extent_m } => {
+                json!({"land_geojson": path.to_string_lossy(), "extent_m": extent_m})
             }
         };
         let doc = json!({

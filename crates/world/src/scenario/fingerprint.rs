@@ -107,6 +107,12 @@ pub fn scenario_fingerprint(config: &ScenarioConfig, seed: u64, map: &impl Water
             .str("png")
             .str(&path.to_string_lossy())
             .f64(*metres_per_pixel),
+        ChartSource::LandGeojson { path, extent_m } => h
+            .str("chart")
+            .str("land_geojson")
+            .str(&path.to_string_lossy())
+            .f64(extent_m[0])
+            .f64(extent_m[1]),
     };
     h.str("k").u64(config.k as u64);
     h.str("sensor_period_s").f64(config.sensor_period_s);

@@ -45,6 +45,10 @@ pub fn chart_spec(source: &ChartSource) -> Result<ChartSpec, ChartError> {
             path: path.clone(),
             metres_per_pixel: Some(*metres_per_pixel),
         }),
+        ChartSource::LandGeojson { path, .. } => Err(ChartError::Io {
+            path: path.display().to_string(),
+            reason: "a GeoJSON land chart needs a mission file's lat/lon frame (auv-mission/1)".into(),
+        }),
     }
 }
 

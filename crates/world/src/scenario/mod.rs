@@ -72,12 +72,14 @@
 mod chase;
 mod config;
 mod fingerprint;
+mod layout;
 mod map;
 pub mod synthetic;
 
 pub use chase::{APPROACH_M, CHASE_TRIALS, STREAM_CHASE};
 pub use config::{ChartSource, ConfigError, MAX_K, SCENARIO_FORMAT, ScenarioConfig, UniformRange};
 pub use fingerprint::{CHART_SAMPLE_GRID, Fnv1a, fnv1a64, scenario_fingerprint};
+pub use layout::{GeneratedNodes, Layout, LayoutError, LayoutNode, TaskRule};
 pub use map::{EMBEDDED_CHART_NAME, LoadError, STREAM_CHART, ScenarioMap, chart_spec, load_map, load_world};
 
 use crate::chart::WaterMap;
@@ -232,6 +234,11 @@ pub struct World {
     dynamic: NodeSet,
     nominal: Vec<Vec3>,
     bound: Vec<Vec3>,
+    /// σ of each dynamic waypoint's drift per axis, m (the configuration's
+    /// `sigma_m` unless a layout set its own).
+    sigma: Vec<f64>,
+    /// Prize collected on a visit, by node id (0 in the paper's model).
+    prize: Vec<f64>,
     position: Vec<Vec3>,
     /// One task per pair, indexed by [`pair_index`].
     tasks: Vec<Task>,
@@ -299,6 +306,8 @@ impl World {
             position: nominal.clone(),
             nominal,
             bound,
+            sigma: vec![config.sigma_m; n],
+            prize: vec![0.0; n],
             tasks,
             adjacency: [NodeSet::EMPTY; MAX_NODES],
         };
@@ -404,7 +413,7 @@ impl World {
     /// `redraw_attempts` land draws, the nominal (x, y). Returns the position
     /// and whether it fell back.
     fn draw_dynamic(&self, i: usize, rng: &mut PlannerRng, map: &impl WaterMap) -> (Vec3, bool) {
-        let (nom, b, sigma) = (self.nominal[i], self.bound[i], self.config.sigma_m);
+        let (nom, b, sigma) = (self.nominal[i], self.bound[i], self.sigma[i]);
         // A degenerate interval (zero bound) pins the axis at its nominal
         // value; `new` cannot fail otherwise (σ > 0 and finite, validated).
         let law = |nv: f64, bv: f64, max: f64| {
@@ -484,11 +493,12 @@ impl World {
             nodes: self
                 .position
                 .iter()
-                .map(|p| Node {
+                .zip(&self.prize)
+                .map(|(p, &prize)| Node {
                     x: p.x,
                     y: p.y,
                     z: p.z,
-                    prize: 0.0,
+                    prize,
                 })
                 .collect(),
             edges,
@@ -508,6 +518,9 @@ impl World {
     ) -> Result<(), ProblemError> {
         let n = self.n();
         problem.begin(n, start, self.goal(), budget_s, self.config.objective, excluded)?;
+        for (i, &prize) in self.prize.iter().enumerate() {
+            problem.set_prize(i, prize);
+        }
         for a in 0..n {
             for b in self.adjacency[a].iter().filter(|&b| b > a) {
                 let d = self.distance_m(a, b);
@@ -575,6 +588,16 @@ impl World {
     #[inline]
     pub fn bounds(&self) -> &[Vec3] {
         &self.bound
+    }
+    /// Prizes collected on a visit, by node id.
+    #[inline]
+    pub fn prizes(&self) -> &[f64] {
+        &self.prize
+    }
+    /// σ of each dynamic waypoint's drift per axis, m, by node id.
+    #[inline]
+    pub fn drift_sigmas_m(&self) -> &[f64] {
+        &self.sigma
     }
     /// The task of pair {a, b} (whether or not the edge exists now), or
     /// `None` when a = b or an id is out of range.
