@@ -29,6 +29,7 @@ pub fn outcome_name(o: Outcome) -> &'static str {
         Outcome::GoalReached => "goal_reached",
         Outcome::TimedOut => "timed_out",
         Outcome::Aborted => "aborted",
+        Outcome::SafeHold => "safe_hold",
     }
 }
 
