@@ -306,6 +306,7 @@ pub(super) fn supervise(
     let mut events = Vec::new();
     // Set once the run is being wound down: shutdown, or a safe hold.
     let mut stopping = false;
+    let mut forwarded = false;
     let mut hold_since: Option<Instant> = None;
     let mut child_error = None;
     let mut rss_kb = [0u64; 3];
@@ -398,13 +399,18 @@ pub(super) fn supervise(
             }
             let Some(status) = s.kid.exit_status() else { continue };
             let cause = s.kill_cause.take().unwrap_or(Cause::External);
-            if status.success() || mission_over {
-                // Done (its mission ended) or told to stop: not a fault.
+            // Done (its mission ended) or told to stop (a Ctrl-C reaches the
+            // children as it reaches us): not a fault.
+            if status.success() || mission_over || signal::shutdown_requested() {
                 continue;
             }
             if status.code() == Some(2) {
                 child_error = Some(format!("{} exited with {status}: {}", p.name(), s.kid.log_tail()));
                 stopping = true;
+                for q in &slots {
+                    q.kid.signal(libc::SIGCONT);
+                    q.kid.signal(libc::SIGTERM);
+                }
                 break;
             }
             s.kid.clear_exit();
@@ -548,7 +554,8 @@ pub(super) fn supervise(
                 }
             }
         }
-        if signal::shutdown_requested() && !stopping {
+        if signal::shutdown_requested() && !forwarded {
+            forwarded = true;
             stopping = true;
             for s in &slots {
                 s.kid.signal(libc::SIGCONT);
