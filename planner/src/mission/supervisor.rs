@@ -338,6 +338,13 @@ pub(super) fn supervise(
             let s = &mut slots[p as usize];
             watch[p as usize] = !a.lockstep && !mission_over && s.restart_at.is_none() && s.kid.running();
         }
+        // The sensor keeps the vehicle's clock: while the vehicle is down it
+        // is silent by design, not stalled.
+        let v = &mut slots[Proc::Vehicle as usize];
+        if v.restart_at.is_some() || !v.kid.running() {
+            watch[Proc::Sensor as usize] = false;
+            monitor.forget(Proc::Sensor);
+        }
         events.clear();
         monitor.poll(watch, &mut events);
         let t = monitor.last_state().map_or(0.0, |s| s.header.mission_time_s);
@@ -521,7 +528,9 @@ pub(super) fn supervise(
                     let f = faults[next];
                     let p = f.target;
                     let s = &mut slots[p as usize];
-                    if s.kid.running() {
+                    // A pause of a process already silent could not be told
+                    // from that silence: wait until it is heard again.
+                    if s.kid.running() && !monitor.stalled(p) {
                         *report.injected.entry(keys[next].clone()).or_default() += 1;
                         note(
                             &mut flog,
