@@ -39,12 +39,13 @@ const VEHICLE: [&str; 7] = [
 /// Kinds the planner injects (plans, refused by the vehicle); the first.
 const PLAN: [&str; 3] = ["non_edge", "visited_node", "bad_plan"];
 
-/// Runs a lockstep mission on 12 waypoints; returns (report, stderr, prefix).
+/// Runs a lockstep mission on 12 waypoints; returns (report, the planner's stderr, prefix).
 fn mission(extra: &[&str]) -> (Value, String, String) {
     mission_with(true, extra)
 }
 
-/// Runs a mission on 12 waypoints, lockstep or not; returns (report, stderr, prefix).
+/// Runs a mission on 12 waypoints, lockstep or not; returns (report, the
+/// planner process's stderr, prefix).
 fn mission_with(lockstep: bool, extra: &[&str]) -> (Value, String, String) {
     let out = temp_dir("w");
     let p = prefix("w");
@@ -68,7 +69,9 @@ fn mission_with(lockstep: bool, extra: &[&str]) -> (Value, String, String) {
     let o = run(&binary("planner"), &args, LIMIT);
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(o.status.success(), "mission failed ({:?}):\n{err}", o.status.code());
-    (read_json(&out.join("report.json")), err, p)
+    // The planner runs as a child of the mission; its stderr is its log.
+    let planner = std::fs::read_to_string(out.join("planner.log")).expect("planner.log");
+    (read_json(&out.join("report.json")), planner, p)
 }
 
 fn count(r: &Value, receiver: &str, kind: &str) -> u64 {

@@ -27,9 +27,9 @@ struct Cli {
     command: Command,
 }
 
-#[derive(Subcommand, Debug)]
 // Parsed once at start-up: the size of the largest variant does not matter.
 #[allow(clippy::large_enum_variant)]
+#[derive(Subcommand, Debug)]
 enum Command {
     /// Solve an `auv-route-instance/1` file and print its solution.
     Solve(cli::solve::Args),

@@ -15,8 +15,12 @@
 //! Tests: `--inject KIND[,KIND…]` also sends one bad state next to each good
 //! one after the first (kinds in turn; see [`auv_messages::wire`]).
 //!
-//! Exit status: 0 when the mission ended (goal or time out), 1 on an error,
-//! 2 on bad arguments, 130 when stopped by a signal.
+//! Safe hold: on SIGUSR1 (the supervisor's request) the vehicle takes no
+//! more plans, goes on to the waypoint it is heading for and ends the
+//! mission there (outcome `safe_hold`, journaled as `hold` then `end`).
+//!
+//! Exit status: 0 when the mission ended (goal, time out or safe hold), 1 on
+//! an error, 2 on bad arguments, 130 when stopped by a signal.
 
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -114,6 +118,8 @@ struct Vehicle {
     faults: FaultCycle,
     /// Waypoints in the network (for injected out-of-range ids).
     n: usize,
+    /// A safe hold is under way.
+    holding: bool,
 }
 
 impl Vehicle {
@@ -192,6 +198,14 @@ impl Vehicle {
                 node,
                 weight: self.sim.current_task().1,
             },
+            SimEvent::Finished(Outcome::SafeHold) => {
+                let node = self.sim.next_waypoint();
+                self.record(&JournalEvent::Hold { t, node })?;
+                JournalEvent::End {
+                    t,
+                    outcome: Outcome::SafeHold,
+                }
+            }
             SimEvent::Finished(outcome) => JournalEvent::End { t, outcome },
         };
         self.record(&e)
@@ -239,12 +253,13 @@ impl Vehicle {
         Ok(seq)
     }
 
-    /// Waits until `done` holds, draining inputs; `false` on shutdown.
+    /// Waits until `done` holds, draining inputs; `false` on shutdown. A
+    /// safe hold ends the wait too (the vehicle no longer waits for anyone).
     fn wait_for(&mut self, timeout_s: f64, what: &'static str, done: &dyn Fn(&Vehicle) -> bool) -> Result<bool, Error> {
         let t0 = Instant::now();
         loop {
             self.drain()?;
-            if done(self) {
+            if done(self) || self.check_hold() {
                 return Ok(true);
             }
             if t0.elapsed().as_secs_f64() > timeout_s {
@@ -263,6 +278,21 @@ impl Vehicle {
                 Wake::Woken(_) => {}
             }
         }
+    }
+
+    /// Starts the safe hold the supervisor asked for (SIGUSR1), once the
+    /// vehicle is on the network; whether it is holding.
+    fn check_hold(&mut self) -> bool {
+        if signal::hold_requested() && self.sim.has_network() && !self.holding {
+            self.holding = true;
+            self.sim.hold();
+            eprintln!(
+                "vehicle-sim: safe hold requested at mission time {:.1} s: holding at waypoint {}",
+                self.sim.time(),
+                self.sim.next_waypoint()
+            );
+        }
+        self.holding
     }
 
     fn answered(&self, session: u64, seq: u64) -> bool {
@@ -342,6 +372,7 @@ impl Vehicle {
                 Wake::Woken(_) => {}
             }
             self.drain()?;
+            self.check_hold();
         }
     }
 }
@@ -365,6 +396,7 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     let faults = FaultCycle::parse_opt("--inject", args.inject.as_deref(), &VEHICLE_FAULTS)
         .map_err(|e| Error::Usage(e.to_string()))?;
     signal::install();
+    signal::install_hold();
     let world = load_world(&args.scenario)?;
     let fingerprint = world.fingerprint();
     let rules = Arc::new(WireRules::new(&world));
@@ -399,6 +431,7 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         journal,
         faults,
         n: rules.n(),
+        holding: false,
     };
     // The mission clock starts with the first snapshot.
     let timeout = args.answer_timeout_s;
@@ -440,6 +473,7 @@ fn run(args: &Args) -> Result<Outcome, Error> {
             Outcome::GoalReached => "goal reached",
             Outcome::TimedOut => "out of time",
             Outcome::Aborted => "stopped",
+            Outcome::SafeHold => "safe hold",
             Outcome::Running => "running",
         },
         v.sim.time(),

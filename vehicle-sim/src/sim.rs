@@ -88,6 +88,9 @@ pub struct VehicleSim {
     distance_m: f64,
     outcome: Outcome,
     stale_plans: u32,
+    /// A safe hold was asked for: no more plans; the mission ends at the
+    /// next waypoint.
+    holding: bool,
 }
 
 impl Default for VehicleSim {
@@ -122,6 +125,7 @@ impl VehicleSim {
             distance_m: 0.0,
             outcome: Outcome::Running,
             stale_plans: 0,
+            holding: false,
         }
     }
 
@@ -216,7 +220,7 @@ impl VehicleSim {
         if ids.iter().any(|&id| id as usize >= n) {
             return Err(RejectKind::NodeOutOfRange);
         }
-        if self.outcome != Outcome::Running {
+        if self.outcome != Outcome::Running || self.holding {
             return Ok(PlanOffer::Stale);
         }
         let first = ids.first().map(|&id| id as usize);
@@ -251,13 +255,14 @@ impl VehicleSim {
         }
         let t = match self.phase {
             Phase::Free => {
-                if self.to == self.goal() || self.next_edge().is_some() {
+                if self.to == self.goal() || self.holding || self.next_edge().is_some() {
                     self.t
                 } else {
                     f64::INFINITY
                 }
             }
             Phase::Travel => self.t + dist(self.pos, self.node_pos(self.to)) / self.net.speed_mps,
+            Phase::Task(_) if self.holding => self.t,
             Phase::Task(rem) => self.t + rem,
         };
         t.min(self.budget())
@@ -286,6 +291,9 @@ impl VehicleSim {
                     if self.to == self.goal() {
                         self.outcome = Outcome::GoalReached;
                         return Some(SimEvent::Finished(Outcome::GoalReached));
+                    }
+                    if self.holding {
+                        return Some(self.end_in_hold());
                     }
                     if let Some((w, task_s, weight)) = self.next_edge() {
                         self.from = self.to;
@@ -322,6 +330,11 @@ impl VehicleSim {
                     }
                     self.distance_m += (end - self.t) * self.net.speed_mps;
                     return self.wait_until(end);
+                }
+                Phase::Task(_) if self.holding => {
+                    // Holding: the task there is left undone.
+                    self.phase = Phase::Free;
+                    return Some(self.end_in_hold());
                 }
                 Phase::Task(rem) => {
                     if self.t + rem <= end {
@@ -412,6 +425,26 @@ impl VehicleSim {
     /// The plan held (empty when none).
     pub fn plan(&self) -> &[u8] {
         if self.has_plan { self.plan.as_bytes() } else { &[] }
+    }
+
+    /// Asks for a safe hold: the vehicle takes no more plans, goes on to the
+    /// waypoint it is heading for, and ends the mission there
+    /// ([`Outcome::SafeHold`]).
+    pub fn hold(&mut self) {
+        if self.outcome == Outcome::Running {
+            self.holding = true;
+            self.has_plan = false;
+        }
+    }
+
+    fn end_in_hold(&mut self) -> SimEvent {
+        self.outcome = Outcome::SafeHold;
+        SimEvent::Finished(Outcome::SafeHold)
+    }
+
+    /// The waypoint the vehicle is at or heading for.
+    pub fn next_waypoint(&self) -> usize {
+        self.to
     }
 
     /// Ends the mission from outside (Ctrl-C).
@@ -521,6 +554,28 @@ mod tests {
         assert_eq!((tasks, d), (3, 300.0));
         assert_eq!(weight, 2.0 / 0.5 + 3.0 / 0.5 + 4.0 / 0.5);
         assert_eq!(v.route().to_vec(), vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn a_safe_hold_ends_the_mission_at_the_next_waypoint_and_refuses_new_plans() {
+        let mut v = VehicleSim::new();
+        v.apply_snapshot(&net());
+        v.offer_plan(&plan_through(&[0, 1, 2, 3], 1)).unwrap();
+        assert_eq!(v.step_until(50.0), None);
+        v.hold();
+        assert_eq!(v.next_waypoint(), 1);
+        assert_eq!(v.offer_plan(&plan_through(&[1, 2, 3], 2)), Ok(PlanOffer::Stale));
+        let ev = run_to_end(&mut v);
+        assert_eq!(
+            ev,
+            vec![
+                (100.0, SimEvent::Arrival { node: 1 }),
+                (100.0, SimEvent::Finished(Outcome::SafeHold)),
+            ]
+        );
+        assert_eq!(v.outcome(), Outcome::SafeHold);
+        assert_eq!(v.totals().0, 0, "the task at the hold is left undone");
+        assert_eq!(v.route().to_vec(), vec![0, 1]);
     }
 
     #[test]

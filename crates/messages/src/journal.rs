@@ -92,6 +92,14 @@ pub enum JournalEvent {
         /// Weight earned by this task.
         weight: f64,
     },
+    /// The vehicle stopped at waypoint `node` to hold there (a safe hold:
+    /// the supervisor asked for it because a process kept failing).
+    Hold {
+        /// Mission time, s.
+        t: f64,
+        /// The waypoint it holds at.
+        node: usize,
+    },
     /// The mission ended.
     End {
         /// Mission time, s.
@@ -107,6 +115,7 @@ fn outcome_code(s: &str) -> Option<Outcome> {
         Outcome::GoalReached,
         Outcome::TimedOut,
         Outcome::Aborted,
+        Outcome::SafeHold,
     ]
     .into_iter()
     .find(|&o| crate::msg::outcome_name(o) == s)
@@ -130,6 +139,7 @@ impl JournalEvent {
                 "distance_m": distance_m, "task_s": task_s, "task_weight": task_weight,
             }),
             Self::Task { t, node, weight } => json!({"event": "task", "t": t, "node": node, "weight": weight}),
+            Self::Hold { t, node } => json!({"event": "hold", "t": t, "node": node}),
             Self::End { t, outcome } => {
                 json!({"event": "end", "t": t, "outcome": crate::msg::outcome_name(*outcome)})
             }
@@ -169,6 +179,10 @@ impl JournalEvent {
                 t,
                 node: u("node")? as usize,
                 weight: f("weight")?,
+            }),
+            Some("hold") => Ok(Self::Hold {
+                t,
+                node: u("node")? as usize,
             }),
             Some("end") => Ok(Self::End {
                 t,
@@ -336,6 +350,7 @@ impl JournalSummary {
             | JournalEvent::Plan { t, .. }
             | JournalEvent::Arrival { t, .. }
             | JournalEvent::Task { t, .. }
+            | JournalEvent::Hold { t, .. }
             | JournalEvent::End { t, .. } => *t,
         }
     }

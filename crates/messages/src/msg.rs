@@ -175,6 +175,9 @@ pub enum Outcome {
     TimedOut = 2,
     /// Stopped from outside (Ctrl-C).
     Aborted = 3,
+    /// Stopped in a safe state: the vehicle holds at a waypoint because a
+    /// process of the mission kept failing (its restart budget ran out).
+    SafeHold = 4,
 }
 
 /// vehicle-sim → planner, sensor-sim: where the vehicle is and what it has done.
@@ -418,7 +421,7 @@ pub enum PlannerPhase {
 /// planner → anyone: counters and latency, sent after every handled input.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.PlannerStatus.v3")]
+#[type_name("auv.PlannerStatus.v4")]
 pub struct PlannerStatus {
     /// Common header; `mission_time_s` is the latest vehicle time seen.
     pub header: Header,
@@ -454,6 +457,19 @@ pub struct PlannerStatus {
     pub rejected: [u64; REJECT_KINDS],
     /// Solver iterations summed over all plans.
     pub iterations_total: u64,
+    /// Median trigger arrival → plan published latency of this process's
+    /// plans, from its own histogram, ns (0 before the first plan).
+    pub latency_p50_ns: u64,
+    /// 99th percentile of the same, ns.
+    pub latency_p99_ns: u64,
+    /// Solver iterations of the plans the deadline cut.
+    pub cut_iterations: u64,
+    /// Cut plans that had a warm start.
+    pub cut_with_warm_start: u64,
+    /// Weight of those cut plans.
+    pub cut_weight: f64,
+    /// Weight of their warm starts on the same problem.
+    pub cut_warm_start_weight: f64,
     /// [`PlannerPhase`].
     pub phase: u32,
     /// Solver iterations of the latest plan.
@@ -499,6 +515,7 @@ pub fn outcome_name(o: Outcome) -> &'static str {
         Outcome::GoalReached => "goal_reached",
         Outcome::TimedOut => "timed_out",
         Outcome::Aborted => "aborted",
+        Outcome::SafeHold => "safe_hold",
     }
 }
 
@@ -566,7 +583,7 @@ macro_rules! codes {
 codes!(ObjectiveCode: MaxWeight, PaperCost);
 codes!(VehicleMode: NoPlan, Travelling, Working, Holding, Finished);
 codes!(VehicleEvent: Periodic, Start, Arrival, Tick, Finished);
-codes!(Outcome: Running, GoalReached, TimedOut, Aborted);
+codes!(Outcome: Running, GoalReached, TimedOut, Aborted, SafeHold);
 codes!(TriggerKind: Initial, Arrival, EdgeLost, TimeChanged, Infeasible, SensorBack);
 codes!(PlannerPhase: Waiting, Running, Finished);
 
@@ -725,6 +742,9 @@ impl Validate for PlannerStatus {
     fn validate(&self) -> Result<(), RejectKind> {
         header_ok(&self.header)?;
         code::<PlannerPhase>(self.phase)?;
+        if !(self.cut_weight.is_finite() && self.cut_warm_start_weight.is_finite()) {
+            return Err(RejectKind::NonFinite);
+        }
         Ok(())
     }
 }
@@ -923,7 +943,7 @@ mod tests {
             );
             assert_eq!(<VehicleState as ZeroCopySend>::type_name(), "auv.VehicleState.v2");
             assert_eq!(<Plan as ZeroCopySend>::type_name(), "auv.Plan.v2");
-            assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v3");
+            assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v4");
         }
     }
 

@@ -49,3 +49,29 @@ pub fn received_signal() -> i32 {
 pub fn request_shutdown() {
     SIGNAL.store(libc::SIGTERM, Ordering::SeqCst);
 }
+
+static HOLD: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
+
+extern "C" fn record_hold(_sig: libc::c_int) {
+    // Only an atomic store: async-signal-safe.
+    HOLD.store(true, Ordering::SeqCst);
+}
+
+/// Installs the handler of SIGUSR1, the supervisor's request for a safe
+/// hold (the vehicle stops at its next waypoint and ends the mission there).
+pub fn install_hold() {
+    // SAFETY: as in `install`: a plain, async-signal-safe handler.
+    unsafe {
+        let mut sa: libc::sigaction = core::mem::zeroed();
+        sa.sa_sigaction = record_hold as extern "C" fn(libc::c_int) as usize;
+        libc::sigemptyset(&mut sa.sa_mask);
+        sa.sa_flags = 0;
+        libc::sigaction(libc::SIGUSR1, &sa, core::ptr::null_mut());
+    }
+}
+
+/// Whether a safe hold was requested since [`install_hold`].
+#[inline]
+pub fn hold_requested() -> bool {
+    HOLD.load(Ordering::Relaxed)
+}

@@ -688,6 +688,23 @@ impl PlannerCore {
         m.alloc = super::alloc::counters();
         m.rejected = rejected.0;
         m.iterations_total = c.iterations_total;
+        // The process's own latency distribution and anytime costs travel
+        // with every status, so a supervisor sees them without sharing memory
+        // with the service (quantiles of the histogram: no allocation).
+        let (p50, p99) = if self.latency_us.is_empty() {
+            (0, 0)
+        } else {
+            (
+                self.latency_us.value_at_quantile(0.5),
+                self.latency_us.value_at_quantile(0.99),
+            )
+        };
+        m.latency_p50_ns = p50.saturating_mul(1000);
+        m.latency_p99_ns = p99.saturating_mul(1000);
+        m.cut_iterations = c.cut.iterations;
+        m.cut_with_warm_start = c.cut.with_warm_start;
+        m.cut_weight = c.cut.weight;
+        m.cut_warm_start_weight = c.cut.warm_start_weight;
         m.last_iterations = c.last_iterations;
         m.rt_priority = self.rt_priority;
         m.phase = if self.finished {

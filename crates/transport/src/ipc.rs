@@ -457,7 +457,28 @@ pub fn retire_domain(prefix: &str) -> Result<bool, SetupError> {
     // SAFETY: no process of this domain is alive (checked just above; the
     // caller owns the run, so none is starting).
     let _ = unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&cfg) };
+    remove_orphaned_node_files(prefix);
     Ok(true)
+}
+
+/// Removes what a node killed while it was being created leaves: iceoryx2
+/// 0.10 cleans a dead node whose details were never written with the
+/// global configuration, i.e. in another domain, so its monitor files and
+/// port tags stay. Only called once no node of the domain is alive, so
+/// every file still named after the domain belongs to a dead process.
+fn remove_orphaned_node_files(prefix: &str) {
+    for f in leftover_files(prefix) {
+        if f.is_file()
+            && std::fs::remove_file(&f).is_ok()
+            && let Some(dir) = f.parent()
+            && dir
+                .parent()
+                .is_some_and(|d| d.file_name().is_some_and(|n| n == "nodes"))
+        {
+            // The dead node's own folder of port tags, once empty.
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
 }
 
 /// Files of the domain `prefix` that exist now in `/dev/shm` and in

@@ -19,7 +19,7 @@
 //! | waypoints | `auv/<vehicle>/sensor/waypoints/v1` | sensor → planner, vehicle |
 //! | vehicle state | `auv/<vehicle>/vehicle/state/v2` | vehicle → planner, sensor |
 //! | plan | `auv/<vehicle>/planner/plan/v2` | planner → vehicle |
-//! | planner status | `auv/<vehicle>/planner/status/v3` | planner → vehicle |
+//! | planner status | `auv/<vehicle>/planner/status/v4` | planner → vehicle |
 //!
 //! Wake services: `auv/<vehicle>/<role>/wake/v1`.
 
@@ -57,7 +57,7 @@ impl Topic {
             Self::Waypoints => "sensor/waypoints/v1",
             Self::VehicleState => "vehicle/state/v2",
             Self::Plan => "planner/plan/v2",
-            Self::Status => "planner/status/v3",
+            Self::Status => "planner/status/v4",
             Self::BenchPing => "bench/ping/v1",
             Self::BenchPong => "bench/pong/v1",
         }

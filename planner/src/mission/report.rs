@@ -9,6 +9,8 @@ use auv_messages::msg::{AllocCounters, Outcome, REJECT_KINDS, RejectCounters, Re
 pub struct Report {
     /// How the mission ended.
     pub outcome: Outcome,
+    /// Why, when it did not reach the goal.
+    pub reason: Option<String>,
     /// Mission time used, s.
     pub time_used_s: f64,
     /// Budget, s.
@@ -64,8 +66,17 @@ pub struct Report {
     pub wall_time_s: f64,
     /// Shared-memory and iceoryx2 files of the run left after it.
     pub shm_files_left: usize,
-    /// Whether the planner ran as a child process.
-    pub planner_process: bool,
+    /// Restarts, stalls and safe hold, by process and cause.
+    pub supervision: super::supervisor::SupervisionReport,
+    /// Arrivals the vehicle's states announced on the wire.
+    pub announced_arrivals: usize,
+    /// Tasks the vehicle's states announced on the wire.
+    pub announced_tasks: u32,
+    /// Announced arrivals and tasks missing from the journal (must be 0).
+    pub lost_journal_events: u64,
+    /// Planner processes whose plans the latency figures summarise (more
+    /// than one: the largest of their quantiles).
+    pub latency_sessions: usize,
     /// Faults injected and what came of them (`--faults`).
     pub faults: Option<super::supervise::FaultReport>,
     /// Times the vehicle resumed from its journal.
@@ -100,6 +111,7 @@ impl Report {
         json!({
             "goal_reached": self.goal_reached(),
             "outcome": auv_messages::msg::outcome_name(self.outcome),
+            "reason": self.reason,
             "time_used_s": self.time_used_s,
             "time_available_s": self.time_available_s,
             "tasks_completed": self.tasks_completed,
@@ -112,6 +124,8 @@ impl Report {
                 "p50": self.latency_us.0,
                 "p99": self.latency_us.1,
                 "max": self.latency_us.2,
+                "planner_processes": self.latency_sessions,
+                "source": if self.latency_sessions > 1 { "largest of the planner processes' own histograms" } else { "the planner's own histogram" },
             },
             "deadline_ms": self.deadline_ms,
             "deadline_misses": self.deadline_misses,
@@ -153,7 +167,12 @@ impl Report {
             "time_scale": if self.lockstep { Value::Null } else { json!(self.time_scale) },
             "wall_time_s": self.wall_time_s,
             "shm_files_left": self.shm_files_left,
-            "planner_process": self.planner_process,
+            "supervision": self.supervision.to_json(),
+            "journal_check": {
+                "announced_arrivals": self.announced_arrivals,
+                "announced_tasks": self.announced_tasks,
+                "lost_events": self.lost_journal_events,
+            },
             "vehicle_restarts": self.vehicle_restarts,
             "rss_kb_peak": {
                 "planner": self.rss_kb[0],
@@ -196,10 +215,36 @@ impl Report {
 
     /// A few lines for people.
     pub fn summary(&self) -> String {
+        let mut text = self.figures();
+        if let Some(why) = &self.reason {
+            text.push_str(&format!("\nwhy: {why}"));
+        }
+        let sup = &self.supervision;
+        let restarts: u64 = sup.restarts.iter().flatten().sum();
+        let stalls: u64 = sup.stalls.iter().flatten().sum();
+        if restarts + stalls > 0 {
+            let each = |m: &[[u64; 2]; 3]| {
+                super::supervise::Proc::ALL
+                    .iter()
+                    .map(|&p| format!("{} {}", p.name(), m[p as usize].iter().sum::<u64>()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            text.push_str(&format!(
+                "\nsupervisor: {restarts} restarts ({}), {stalls} stalls ({})",
+                each(&sup.restarts),
+                each(&sup.stalls)
+            ));
+        }
+        text
+    }
+
+    fn figures(&self) -> String {
         let verdict = match self.outcome {
             Outcome::GoalReached => "goal reached",
             Outcome::TimedOut => "OUT OF TIME before the goal",
             Outcome::Aborted => "stopped before the end",
+            Outcome::SafeHold => "SAFE HOLD before the goal",
             Outcome::Running => "ended without a final state",
         };
         format!(

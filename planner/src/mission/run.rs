@@ -1,44 +1,32 @@
-//! `planner mission`: starts sensor-sim and vehicle-sim as child processes,
-//! runs the re-planning service on a thread of its own, shows progress, and
-//! writes `report.json`, `mission.log`, `mission.svg` and a summary.
-//!
-//! Threads: the service thread owns every iceoryx2 port of this process and
-//! is the only one the allocator counts; it hands its events to the main
-//! thread through a fixed-size lock-free queue (no allocation), and the main
-//! thread formats the log, draws the progress bar and watches the children.
+//! `planner mission`: the planner service (`planner serve`), sensor-sim and
+//! vehicle-sim as supervised child processes ([`super::supervisor`]), in
+//! scaled time or lockstep alike; shows progress and writes `report.json`,
+//! `mission.log` (written by the planner process), `mission.svg`,
+//! `journal.jsonl` (the vehicle's), `faults.log`, `pids.json` and a summary.
 //!
 //! Shutdown: Ctrl-C reaches all three processes (one process group); each
 //! stops its loop and drops its ports. A SIGINT/SIGTERM sent to this process
 //! alone is forwarded to the children. Afterwards the run's iceoryx2 domain
 //! is retired (dead nodes cleaned, the per-domain management segment
-//! removed) and the files it left, if any, are counted in the report.
+//! removed) and the files it left, if any, are counted in the report. The
+//! domains of earlier runs whose supervisor was killed are cleaned at start.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitCode, ExitStatus, Stdio};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
-
-use heapless::spsc::Queue;
+use std::process::ExitCode;
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use super::external::{ExternalArgs, VehicleFigures, announce, wait_for_outside_nodes};
-use super::log::lines;
 use super::report::Report;
-use super::supervise::{
-    FaultKind, FaultReport, LATEST_INJECTION, LivenessEvent, Monitor, PlannerTotals, Proc, plan_faults,
-};
+use super::stale::{RunMark, clean_stale_runs};
+use super::supervise::{Announced, FaultReport, PlannerTotals};
+use super::supervisor::{SupervisionReport, SupervisorArgs, supervise};
 use crate::plot::PlotError;
-use crate::serve::{ServeError, ServiceArgs, make_solver, open_ports, prepare_service_thread};
+use crate::serve::{ServeError, ServiceArgs};
 use auv_messages::journal::{JournalEvent, JournalSummary};
 use auv_messages::msg::{Outcome, RejectCounters, VehicleState};
-use auv_messages::wire::{FaultCycle, SENSOR_FAULTS, VEHICLE_FAULTS, WireRules};
+use auv_messages::wire::{FaultCycle, SENSOR_FAULTS, VEHICLE_FAULTS};
 use auv_platform::signal;
-use auv_service::alloc;
-use auv_service::core::{PlannerCore, ServiceConfig, ServiceCounters, ServiceEvent};
-use auv_service::run::{ExitReason, run_service};
-use auv_transport::ipc::{IpcContext, Shm, cleanup_dead_nodes, domain_config, leftover_files, retire_domain};
+use auv_transport::ipc::{cleanup_dead_nodes, domain_config, leftover_files, retire_domain};
 use auv_transport::{IpcOptions, SetupError, WaitMode, unique_prefix};
 use auv_world::load::{MissionWorld, ScenarioArgs, WorldError, load_world};
 
@@ -77,14 +65,12 @@ pub struct MissionArgs {
     /// Give up when a peer stays silent this long, real s.
     #[arg(long, default_value_t = 60.0)]
     pub answer_timeout_s: f64,
-    /// Run the planner as a child process (`planner serve`) supervised like
-    /// the simulators, instead of on a thread of this process: any of the
-    /// three can then be killed and restarted.
-    #[arg(long)]
-    pub planner_process: bool,
-    /// Inject this many faults at random mission times (SIGKILL + restart or
-    /// SIGSTOP/SIGCONT of a random process; scaled time; implies
-    /// --planner-process). Drawn from --fault-seed.
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub supervisor: SupervisorArgs,
+    /// Inject this many faults at random mission times (SIGKILL or
+    /// SIGSTOP/SIGCONT of a random process; scaled time). Drawn from
+    /// --fault-seed.
     #[arg(long, default_value_t = 0, conflicts_with = "lockstep")]
     pub faults: usize,
     /// Seed of the fault draws (default: the scenario seed).
@@ -140,65 +126,11 @@ pub enum MissionError {
     Plot(#[from] PlotError),
 }
 
-fn io_err(path: &Path, e: impl std::fmt::Display) -> MissionError {
+pub(super) fn io_err(path: &Path, e: impl std::fmt::Display) -> MissionError {
     MissionError::Io {
         path: path.display().to_string(),
         message: e.to_string(),
     }
-}
-
-/// Events the queue holds; the main thread drains it every few ms.
-const QUEUE_LEN: usize = 1024;
-
-/// What the service thread shares with the main thread.
-struct Shared {
-    mission_time_bits: AtomicU64,
-    plans: AtomicU64,
-    stop: AtomicBool,
-}
-
-/// What the service thread hands back.
-struct ServiceResult {
-    exit: ExitReason,
-    counters: ServiceCounters,
-    latency_us: (u64, u64, u64),
-    rejected: RejectCounters,
-    last_state: Option<VehicleState>,
-    rt_priority: Option<i32>,
-}
-
-#[allow(clippy::too_many_arguments)]
-fn service_thread(
-    opts: &IpcOptions,
-    fingerprint: u64,
-    rules: &Arc<WireRules>,
-    plan_faults: FaultCycle,
-    cfg: ServiceConfig,
-    events: &mut dyn FnMut(&ServiceEvent),
-    shared: &Shared,
-    rt_priority: Option<i32>,
-) -> Result<ServiceResult, ServeError> {
-    let rt_priority = prepare_service_thread(rt_priority, cfg.cut_at_deadline)?;
-    let ctx = IpcContext::<Shm>::new(opts, "planner")?;
-    let mut ports = open_ports(&ctx, fingerprint, rules, plan_faults)?;
-    let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
-    core.set_rt_priority(rt_priority);
-    let exit = run_service(&mut core, &mut ports, events, &mut |c: &PlannerCore| {
-        shared
-            .mission_time_bits
-            .store(c.mission_time_s().to_bits(), Ordering::Relaxed);
-        shared.plans.store(c.counters().plans, Ordering::Relaxed);
-        !shared.stop.load(Ordering::Relaxed)
-    })?;
-    let h = core.latency_us();
-    Ok(ServiceResult {
-        exit,
-        counters: *core.counters(),
-        latency_us: (h.value_at_quantile(0.5), h.value_at_quantile(0.99), h.max()),
-        rejected: ports.rejected(),
-        last_state: core.last_state().copied(),
-        rt_priority,
-    })
 }
 
 /// A sibling binary of this executable (`sensor-sim`, `vehicle-sim`).
@@ -216,145 +148,6 @@ pub fn sibling_binary(name: &str) -> Result<PathBuf, MissionError> {
     }
 }
 
-/// A child process and where its stderr goes.
-struct Kid {
-    name: &'static str,
-    child: Option<Child>,
-    log: PathBuf,
-    status: Option<ExitStatus>,
-    bin: PathBuf,
-    args: Vec<String>,
-}
-
-impl Kid {
-    fn spawn(name: &'static str, args: &[String], out: &Path) -> Result<Self, MissionError> {
-        Self::spawn_bin(name, name, args, out)
-    }
-
-    /// `bin_name` started as `name` (the planner runs as `planner serve`).
-    fn spawn_bin(name: &'static str, bin_name: &str, args: &[String], out: &Path) -> Result<Self, MissionError> {
-        let bin = if bin_name == "planner" {
-            std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?
-        } else {
-            sibling_binary(bin_name)?
-        };
-        let log = out.join(format!("{name}.log"));
-        File::create(&log).map_err(|e| io_err(&log, e))?;
-        let mut k = Self {
-            name,
-            child: None,
-            log,
-            status: None,
-            bin,
-            args: args.to_vec(),
-        };
-        k.start(&[])?;
-        Ok(k)
-    }
-
-    /// Starts the process (again), with `extra` flags; stderr appends to its log.
-    fn start(&mut self, extra: &[String]) -> Result<(), MissionError> {
-        let err = File::options()
-            .append(true)
-            .open(&self.log)
-            .map_err(|e| io_err(&self.log, e))?;
-        let child = Command::new(&self.bin)
-            .args(&self.args)
-            .args(extra)
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(err)
-            .spawn()
-            .map_err(|e| MissionError::Child(format!("cannot start {}: {e}", self.bin.display())))?;
-        self.child = Some(child);
-        self.status = None;
-        Ok(())
-    }
-
-    /// SIGKILL and reap (a crash, as far as everyone else can tell).
-    fn kill_now(&mut self) {
-        if let Some(c) = &mut self.child {
-            let _ = c.kill();
-            let _ = c.wait();
-        }
-        self.child = None;
-    }
-
-    /// Whether it has exited (reaps it).
-    fn poll(&mut self) -> bool {
-        if self.status.is_some() {
-            return true;
-        }
-        if let Some(c) = &mut self.child
-            && let Ok(Some(st)) = c.try_wait()
-        {
-            self.status = Some(st);
-            self.child = None;
-        }
-        self.status.is_some()
-    }
-
-    /// Resident set size now, kB (`None`: not running).
-    fn rss_kb(&self) -> Option<u64> {
-        rss_kb_of(self.child.as_ref()?.id())
-    }
-
-    fn signal(&self, sig: i32) {
-        if let Some(c) = &self.child {
-            // SAFETY: a signal to our own child's pid.
-            unsafe { libc::kill(c.id() as libc::pid_t, sig) };
-        }
-    }
-
-    /// Waits up to `t`, then SIGTERM, then SIGKILL.
-    fn finish(&mut self, t: Duration) {
-        let t0 = Instant::now();
-        while !self.poll() && t0.elapsed() < t {
-            std::thread::sleep(Duration::from_millis(10));
-        }
-        if !self.poll() {
-            self.signal(libc::SIGTERM);
-            let t1 = Instant::now();
-            while !self.poll() && t1.elapsed() < Duration::from_secs(2) {
-                std::thread::sleep(Duration::from_millis(10));
-            }
-        }
-        if !self.poll()
-            && let Some(c) = &mut self.child
-        {
-            let _ = c.kill();
-            self.status = c.wait().ok();
-            self.child = None;
-        }
-    }
-
-    fn failed(&self) -> Option<String> {
-        let st = self.status?;
-        if st.success() || st.code() == Some(130) {
-            return None;
-        }
-        let tail = std::fs::read_to_string(&self.log).unwrap_or_default();
-        let last = tail.lines().rev().take(3).collect::<Vec<_>>().join(" | ");
-        Some(format!("{} exited with {st}: {last}", self.name))
-    }
-}
-
-impl Drop for Kid {
-    fn drop(&mut self) {
-        if self.child.is_some() {
-            self.finish(Duration::ZERO);
-        }
-    }
-}
-
-/// Resident set size of process `pid`, kB (`VmRSS` in `/proc/<pid>/status`).
-pub fn rss_kb_of(pid: u32) -> Option<u64> {
-    let text = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    text.lines()
-        .find_map(|l| l.strip_prefix("VmRSS:"))
-        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
-}
-
 fn fresh_out_dir(seed: u64) -> PathBuf {
     let secs = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
     let base = format!("mission-{seed}-{secs}");
@@ -367,10 +160,11 @@ fn fresh_out_dir(seed: u64) -> PathBuf {
     p
 }
 
-/// What the main thread collects from the events for the plot.
+/// What the plot shows of the run, read back from the vehicle's journal.
 #[derive(Default)]
-struct Trace {
+pub(super) struct Trace {
     arrivals: Vec<(f64, f64)>,
+    /// Where re-plans were accepted: at the waypoint the vehicle last reached.
     replans_at: Vec<(f64, f64)>,
     /// Where a re-plan changed the route (a re-plan that confirms the plan
     /// in force is not drawn).
@@ -381,23 +175,39 @@ struct Trace {
 }
 
 impl Trace {
-    fn add(&mut self, e: &ServiceEvent) {
-        match *e {
-            ServiceEvent::Arrival { at, .. } => self.arrivals.push(at),
-            ServiceEvent::Plan { route, at, .. } => {
-                if self.first_plan.is_empty() {
-                    self.first_plan = route.to_vec();
-                } else {
-                    self.replans_at.push(at);
-                    if changes_route(&self.last_plan, &route.to_vec()) {
-                        self.changed_at.push(at);
-                    }
+    /// The trace of `journal`; `last_epoch`: the latest snapshot epoch seen
+    /// (the plot draws the waypoints where they were last reported).
+    pub(super) fn from_journal(journal: &JournalSummary, last_epoch: u64) -> Self {
+        let mut t = Self {
+            last_epoch,
+            ..Self::default()
+        };
+        let mut here: Option<(f64, f64)> = None;
+        for e in &journal.events {
+            match e {
+                JournalEvent::Arrival { pos, .. } => {
+                    t.arrivals.push((pos[0], pos[1]));
+                    here = Some((pos[0], pos[1]));
                 }
-                self.last_plan = route.to_vec();
+                JournalEvent::Plan { route, .. } => {
+                    if t.first_plan.is_empty() {
+                        t.first_plan = route.clone();
+                    } else {
+                        if let Some(at) = here {
+                            t.replans_at.push(at);
+                        }
+                        // The journal says when, not where: the vehicle takes
+                        // a plan on at a waypoint, its last arrival.
+                        if changes_route(&t.last_plan, route) {
+                            t.changed_at.extend(here);
+                        }
+                    }
+                    t.last_plan = route.clone();
+                }
+                _ => {}
             }
-            ServiceEvent::SensorUpdate { epoch, .. } => self.last_epoch = epoch,
-            ServiceEvent::Finished { .. } => {}
         }
+        t
     }
 }
 
@@ -513,531 +323,33 @@ fn plot(
     Ok(())
 }
 
-/// What a run of the three processes produced, whichever way the planner ran.
-struct RunOut {
-    totals: PlannerTotals,
-    allocator_installed: bool,
-    last_state: Option<VehicleState>,
-    /// The vehicle reported the end of the mission to the planner.
-    finished: bool,
-    trace: Trace,
-    faults: Option<FaultReport>,
-    /// Peak resident set size of each child (planner, sensor, vehicle), kB
-    /// (0: not measured).
-    rss_kb: [u64; 3],
+/// What a run of the three processes produced.
+pub(super) struct RunOut {
+    pub(super) totals: PlannerTotals,
+    pub(super) allocator_installed: bool,
+    pub(super) last_state: Option<VehicleState>,
+    /// The vehicle's journal records the end of the mission.
+    pub(super) finished: bool,
+    pub(super) trace: Trace,
+    pub(super) faults: Option<FaultReport>,
+    pub(super) supervision: SupervisionReport,
+    /// What the vehicle announced on the wire, to check the journal against.
+    pub(super) announced: Announced,
+    /// Peak resident set size of each child (planner, sensor, vehicle), kB.
+    pub(super) rss_kb: [u64; 3],
 }
 
 /// How to start the simulators, where to write, and the mission's budget.
-struct Launch<'a> {
-    out: &'a Path,
+pub(super) struct Launch<'a> {
+    pub(super) out: &'a Path,
     /// Flags every process gets.
-    common: &'a [String],
-    sensor_args: &'a [String],
-    vehicle_args: &'a [String],
+    pub(super) common: &'a [String],
+    pub(super) sensor_args: &'a [String],
+    pub(super) vehicle_args: &'a [String],
     /// Mission time budget, s.
-    budget: f64,
-    /// The scenario seed (the default fault seed).
-    seed: u64,
-}
-
-/// Runs the mission with the service on a thread of this process.
-fn threaded(
-    a: &MissionArgs,
-    opts: IpcOptions,
-    fingerprint: u64,
-    cfg: ServiceConfig,
-    l: &Launch,
-    rules: Arc<WireRules>,
-    plan_faults: FaultCycle,
-) -> Result<RunOut, MissionError> {
-    let (out, vehicle_args, budget) = (l.out.to_path_buf(), l.vehicle_args, l.budget);
-    // An outside vehicle or sensor takes the place of the simulator.
-    let mut kids = Vec::with_capacity(2);
-    if !a.external.external_sensor {
-        kids.push(Kid::spawn("sensor-sim", l.sensor_args, &out)?);
-    }
-    if !a.external.external_vehicle {
-        kids.push(Kid::spawn("vehicle-sim", vehicle_args, &out)?);
-    }
-
-    let log_path = out.join("mission.log");
-    let mut log = BufWriter::new(File::create(&log_path).map_err(|e| io_err(&log_path, e))?);
-    let bar = if a.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        let b = indicatif::ProgressBar::new(budget as u64);
-        if let Ok(style) =
-            indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} s mission time · {msg}")
-        {
-            b.set_style(style.progress_chars("=> "));
-        }
-        b
-    };
-    let shared = Shared {
-        mission_time_bits: AtomicU64::new(0),
-        plans: AtomicU64::new(0),
-        stop: AtomicBool::new(false),
-    };
-    let mut queue: Box<Queue<ServiceEvent, QUEUE_LEN>> = Box::new(Queue::new());
-    let (mut producer, mut consumer) = queue.split();
-    let mut trace = Trace::default();
-    let mut log_error = None;
-    let mut child_error = None;
-
-    let rt_priority = a.service.rt_priority;
-    let opts = &opts;
-    let result = std::thread::scope(|scope| {
-        let shared = &shared;
-        let rules = &rules;
-        let handle = scope.spawn(move || {
-            let mut events = |e: &ServiceEvent| {
-                // Never drop an event (the log must be complete): wait for room.
-                while producer.enqueue(*e).is_err() {
-                    if shared.stop.load(Ordering::Relaxed) {
-                        return;
-                    }
-                    std::thread::yield_now();
-                }
-            };
-            let r = service_thread(
-                opts,
-                fingerprint,
-                rules,
-                plan_faults,
-                cfg,
-                &mut events,
-                shared,
-                rt_priority,
-            );
-            alloc::end_steady_state();
-            r
-        });
-        let mut silent_since: Option<Instant> = None;
-        let mut forwarded = false;
-        loop {
-            let mut drained = 0;
-            while let Some(e) = consumer.dequeue() {
-                drained += 1;
-                trace.add(&e);
-                for line in lines(&e) {
-                    if let Err(err) = writeln!(log, "{line}") {
-                        log_error.get_or_insert_with(|| io_err(&log_path, err));
-                    }
-                }
-            }
-            let t = f64::from_bits(shared.mission_time_bits.load(Ordering::Relaxed));
-            bar.set_position(t.clamp(0.0, budget) as u64);
-            bar.set_message(format!(
-                "{} plans, {} arrivals",
-                shared.plans.load(Ordering::Relaxed),
-                trace.arrivals.len()
-            ));
-            if handle.is_finished() && drained == 0 {
-                break;
-            }
-            if signal::shutdown_requested() && !forwarded {
-                forwarded = true;
-                shared.stop.store(true, Ordering::Relaxed);
-                for k in &kids {
-                    k.signal(signal::received_signal());
-                }
-            }
-            // A child that died early leaves the service waiting: stop it
-            // after a grace period (the vehicle exits at the mission's end).
-            let dead = kids.iter_mut().any(|k| k.poll() && k.failed().is_some());
-            if dead {
-                let since = *silent_since.get_or_insert_with(Instant::now);
-                if since.elapsed() > Duration::from_secs(2) {
-                    shared.stop.store(true, Ordering::Relaxed);
-                    child_error = kids.iter().find_map(|k| k.failed());
-                }
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        handle.join()
-    });
-    bar.finish_and_clear();
-    for k in &mut kids {
-        k.finish(Duration::from_secs(10));
-    }
-    if let Err(e) = log.flush() {
-        log_error.get_or_insert_with(|| io_err(&log_path, e));
-    }
-    let service = match result {
-        Ok(r) => r?,
-        Err(_) => return Err(MissionError::Child("the service thread panicked".into())),
-    };
-    if let Some(e) = log_error {
-        return Err(e);
-    }
-    if let Some(e) = child_error.or_else(|| kids.iter().find_map(|k| k.failed())) {
-        return Err(MissionError::Child(e));
-    }
-    let c = service.counters;
-    Ok(RunOut {
-        totals: PlannerTotals {
-            plans: c.plans,
-            sensor_updates: c.sensor_updates,
-            deadline_misses: c.deadline_misses,
-            deadline_cuts: c.deadline_cuts,
-            fallbacks: c.fallbacks,
-            iterations_total: c.iterations_total,
-            max_latency_us: service.latency_us.2,
-            latency_us: service.latency_us,
-            rejected: service.rejected,
-            alloc: alloc::counters(),
-            cut: Some(c.cut),
-            rt_priority: service.rt_priority,
-        },
-        allocator_installed: alloc::installed(),
-        last_state: service.last_state,
-        finished: service.exit == ExitReason::Finished,
-        trace,
-        faults: None,
-        rss_kb: [0; 3],
-    })
-}
-
-/// The fault being handled now.
-#[derive(Clone, Copy, Debug)]
-enum Active {
-    /// A killed process was restarted: cleared when it is heard from again.
-    Restarting {
-        p: Proc,
-        key_idx: usize,
-        since: Instant,
-        attempts: u32,
-    },
-    /// A process is stopped until `until`.
-    Paused {
-        p: Proc,
-        key_idx: usize,
-        since: Instant,
-        until: Instant,
-        detected: bool,
-    },
-    /// A paused process was continued: cleared when it is heard from again.
-    Continued { p: Proc, key_idx: usize, detected: bool },
-}
-
-/// Longest wait for a restarted or continued process to be heard from
-/// again before the fault counts as not cleared, real s.
-const CLEAR_LIMIT: Duration = Duration::from_secs(30);
-
-/// Starts of a killed process before giving up: a start can fail on a race
-/// with the dead node's cleanup (iceoryx2 #1578; notes §5 say retry).
-const RESTART_ATTEMPTS: u32 = 3;
-
-/// Extra flags of a restarted process: a sensor starts from the vehicle's
-/// mission time, not from epoch 0 (the vehicle resumes from its journal,
-/// the planner from the topics' history, with their usual flags).
-fn restart_flags(p: Proc) -> Vec<String> {
-    if p == Proc::Sensor {
-        vec!["--resume-wait-s".into(), "5".into()]
-    } else {
-        Vec::new()
-    }
-}
-
-/// Runs the mission with all three as supervised child processes, injecting
-/// the faults `--faults` asks for.
-fn supervised(
-    a: &MissionArgs,
-    opts: &IpcOptions,
-    l: &Launch,
-    sensor_period_s: f64,
-    fingerprint: u64,
-) -> Result<RunOut, MissionError> {
-    let (out, common, vehicle_args, budget) = (l.out, l.common, l.vehicle_args, l.budget);
-    let stall = Duration::from_secs_f64(a.stall_timeout_ms / 1000.0);
-    let sensor_stall = if a.lockstep {
-        stall
-    } else {
-        stall.max(Duration::from_secs_f64(3.0 * sensor_period_s / a.time_scale))
-    };
-    let timeouts = [stall, sensor_stall, stall];
-    // The monitor subscribes before anyone publishes: it sees every status.
-    let mut monitor = Monitor::new(opts, timeouts, fingerprint)?;
-    let mut planner_args = vec!["serve".to_string()];
-    planner_args.extend(common.iter().cloned());
-    planner_args.extend(a.service.to_flags());
-    if a.lockstep && !a.enforce_deadline {
-        planner_args.push("--lockstep".into());
-    }
-    let log_path = out.join("mission.log");
-    File::create(&log_path).map_err(|e| io_err(&log_path, e))?;
-    planner_args.extend(["--log".into(), log_path.display().to_string()]);
-    let mut kids = [
-        Kid::spawn_bin("planner", "planner", &planner_args, out)?,
-        Kid::spawn("sensor-sim", l.sensor_args, out)?,
-        Kid::spawn("vehicle-sim", vehicle_args, out)?,
-    ];
-    let fault_seed = a.fault_seed.unwrap_or(l.seed);
-    let faults = plan_faults(fault_seed, a.faults, budget, &Proc::ALL);
-    let mut report = FaultReport {
-        planned: faults.clone(),
-        timeouts_ms: timeouts.map(|t| t.as_secs_f64() * 1000.0),
-        ..FaultReport::default()
-    };
-    let keys: Vec<String> = faults.iter().map(|f| f.key()).collect();
-    let faults_path = out.join("faults.log");
-    let mut flog = BufWriter::new(File::create(&faults_path).map_err(|e| io_err(&faults_path, e))?);
-    let wall0 = Instant::now();
-    let note = |flog: &mut BufWriter<File>, t: f64, v: serde_json::Value| {
-        let mut v = v;
-        v["t"] = serde_json::json!(t);
-        v["wall_s"] = serde_json::json!(wall0.elapsed().as_secs_f64());
-        let _ = writeln!(flog, "{v}");
-        let _ = flog.flush();
-    };
-    let bar = if a.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        indicatif::ProgressBar::new(budget as u64)
-    };
-    let mut next = 0;
-    let mut active: Option<Active> = None;
-    let mut events = Vec::new();
-    let mut forwarded = false;
-    let mut failed_since: Option<Instant> = None;
-    let mut child_error = None;
-    let mut rss_kb = [0u64; 3];
-    let mut rss_at = Instant::now();
-    loop {
-        if rss_at.elapsed() >= Duration::from_millis(100) {
-            rss_at = Instant::now();
-            for (peak, k) in rss_kb.iter_mut().zip(&kids) {
-                *peak = (*peak).max(k.rss_kb().unwrap_or(0));
-            }
-        }
-        let vehicle_done = kids[Proc::Vehicle as usize].poll()
-            || monitor
-                .last_state()
-                .is_some_and(|s| s.outcome != Outcome::Running as u32);
-        let mut watch = [false; 3];
-        for p in Proc::ALL {
-            let restarting = matches!(active, Some(Active::Restarting { p: q, .. }) if q == p);
-            watch[p as usize] = !a.lockstep && !vehicle_done && !restarting && !kids[p as usize].poll();
-        }
-        events.clear();
-        monitor.poll(watch, &mut events);
-        let t = monitor.last_state().map_or(0.0, |s| s.header.mission_time_s);
-        bar.set_position(t.clamp(0.0, budget) as u64);
-        for e in &events {
-            match *e {
-                LivenessEvent::Stalled { proc, silent } => {
-                    *report.stalls.entry(proc.name().to_string()).or_default() += 1;
-                    if let Some(Active::Paused { p, since, detected, .. }) = &mut active
-                        && *p == proc
-                        && !*detected
-                    {
-                        *detected = true;
-                        report.detect_ms_max = report.detect_ms_max.max(since.elapsed().as_secs_f64() * 1000.0);
-                    }
-                    eprintln!("planner: {} silent for {} ms: stalled", proc.name(), silent.as_millis());
-                    note(
-                        &mut flog,
-                        t,
-                        serde_json::json!({"event": "stall_detected", "process": proc.name(), "silent_ms": silent.as_millis() as u64}),
-                    );
-                }
-                LivenessEvent::Recovered { proc, silent } => note(
-                    &mut flog,
-                    t,
-                    serde_json::json!({"event": "recovered", "process": proc.name(), "silent_ms": silent.as_millis() as u64}),
-                ),
-            }
-        }
-        // The fault in hand, then the next one.
-        match active {
-            Some(Active::Restarting {
-                p,
-                key_idx,
-                since,
-                attempts,
-            }) => {
-                if monitor.heard(p) {
-                    *report.cleared.entry(keys[key_idx].clone()).or_default() += 1;
-                    note(
-                        &mut flog,
-                        t,
-                        serde_json::json!({"event": "cleared", "fault": keys[key_idx]}),
-                    );
-                    active = None;
-                } else if since.elapsed() > CLEAR_LIMIT || vehicle_done {
-                    active = None;
-                } else if attempts < RESTART_ATTEMPTS && kids[p as usize].poll() && kids[p as usize].failed().is_some()
-                {
-                    let why = kids[p as usize].failed().unwrap_or_default();
-                    note(
-                        &mut flog,
-                        t,
-                        serde_json::json!({"event": "restart_failed", "process": p.name(), "why": why}),
-                    );
-                    kids[p as usize].start(&restart_flags(p))?;
-                    active = Some(Active::Restarting {
-                        p,
-                        key_idx,
-                        since,
-                        attempts: attempts + 1,
-                    });
-                }
-            }
-            Some(Active::Paused {
-                p,
-                key_idx,
-                until,
-                detected,
-                ..
-            }) => {
-                if Instant::now() >= until || vehicle_done && p != Proc::Vehicle {
-                    kids[p as usize].signal(libc::SIGCONT);
-                    note(
-                        &mut flog,
-                        t,
-                        serde_json::json!({"event": "continued", "process": p.name()}),
-                    );
-                    active = Some(Active::Continued { p, key_idx, detected });
-                }
-            }
-            Some(Active::Continued { p, key_idx, detected }) => {
-                if !monitor.stalled(p) || vehicle_done {
-                    if detected {
-                        *report.cleared.entry(keys[key_idx].clone()).or_default() += 1;
-                        note(
-                            &mut flog,
-                            t,
-                            serde_json::json!({"event": "cleared", "fault": keys[key_idx]}),
-                        );
-                    }
-                    active = None;
-                }
-            }
-            None => {
-                if next < faults.len() && t >= faults[next].at_s && t > LATEST_INJECTION * budget {
-                    report.skipped_late += 1;
-                    note(
-                        &mut flog,
-                        t,
-                        serde_json::json!({"event": "skipped_late", "fault": keys[next]}),
-                    );
-                    next += 1;
-                } else if next < faults.len() && !vehicle_done && !forwarded && t >= faults[next].at_s {
-                    let f = faults[next];
-                    let p = f.target;
-                    *report.injected.entry(keys[next].clone()).or_default() += 1;
-                    note(
-                        &mut flog,
-                        t,
-                        serde_json::json!({"event": "inject", "fault": keys[next], "planned_t": f.at_s}),
-                    );
-                    let now = Instant::now();
-                    match f.kind {
-                        FaultKind::Kill => {
-                            kids[p as usize].kill_now();
-                            monitor.forget(p);
-                            kids[p as usize].start(&restart_flags(p))?;
-                            *report.restarts.entry(p.name().to_string()).or_default() += 1;
-                            active = Some(Active::Restarting {
-                                p,
-                                key_idx: next,
-                                since: now,
-                                attempts: 1,
-                            });
-                        }
-                        FaultKind::Pause => {
-                            kids[p as usize].signal(libc::SIGSTOP);
-                            active = Some(Active::Paused {
-                                p,
-                                key_idx: next,
-                                since: now,
-                                until: now + timeouts[p as usize] + Duration::from_millis(500),
-                                detected: false,
-                            });
-                        }
-                    }
-                    next += 1;
-                }
-            }
-        }
-        if signal::shutdown_requested() && !forwarded {
-            forwarded = true;
-            for k in &kids {
-                k.signal(libc::SIGCONT);
-                k.signal(signal::received_signal());
-            }
-        }
-        if kids[Proc::Vehicle as usize].poll() {
-            break;
-        }
-        // A child that failed on its own (not one we killed, nor one being
-        // restarted) ends the run after a grace period.
-        let restarting = match active {
-            Some(Active::Restarting { p, .. }) => Some(p as usize),
-            _ => None,
-        };
-        if kids
-            .iter_mut()
-            .enumerate()
-            .any(|(i, k)| Some(i) != restarting && k.poll() && k.failed().is_some())
-        {
-            let since = *failed_since.get_or_insert_with(Instant::now);
-            if since.elapsed() > Duration::from_secs(2) {
-                child_error = kids.iter().find_map(|k| k.failed());
-                break;
-            }
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    bar.finish_and_clear();
-    for k in &kids {
-        k.signal(libc::SIGCONT);
-    }
-    // The planner and the sensor end when they see the vehicle's last state.
-    for k in &mut kids {
-        k.finish(Duration::from_secs(10));
-    }
-    events.clear();
-    monitor.poll([false; 3], &mut events);
-    let _ = flog.flush();
-    if let Some(e) = child_error.or_else(|| kids.iter().find_map(|k| k.failed())) {
-        return Err(MissionError::Child(e));
-    }
-    let totals = monitor.planner_totals();
-    let last_state = monitor.last_state().copied();
-    let mut trace = Trace {
-        last_epoch: monitor.last_epoch(),
-        ..Trace::default()
-    };
-    drop(monitor);
-    // The plot's trace comes from the journal (the planner's events are in
-    // its own process).
-    let journal = JournalSummary::read(&out.join("journal.jsonl")).map_err(|e| MissionError::Child(e.to_string()))?;
-    for e in &journal.events {
-        match e {
-            JournalEvent::Arrival { pos, .. } => trace.arrivals.push((pos[0], pos[1])),
-            JournalEvent::Plan { route, .. } => {
-                if trace.first_plan.is_empty() {
-                    trace.first_plan = route.clone();
-                } else if changes_route(&trace.last_plan, route) {
-                    // The journal says when, not where: the vehicle takes a
-                    // plan on at a waypoint, its last arrival.
-                    trace.changed_at.extend(trace.arrivals.last().copied());
-                }
-                trace.last_plan = route.clone();
-            }
-            _ => {}
-        }
-    }
-    Ok(RunOut {
-        totals,
-        allocator_installed: true,
-        finished: journal.outcome().is_some_and(|o| o != Outcome::Aborted),
-        last_state,
-        trace,
-        faults: Some(report),
-        rss_kb,
-    })
+    pub(super) budget: f64,
+    /// The world's seed (the default fault seed).
+    pub(super) seed: u64,
 }
 
 /// Runs one mission; returns its report and output folder.
@@ -1076,16 +388,15 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         FaultCycle::parse_opt("--inject-sensor", a.inject_sensor.as_deref(), &SENSOR_FAULTS).map_err(usage)?;
     let vehicle_faults =
         FaultCycle::parse_opt("--inject-vehicle", a.inject_vehicle.as_deref(), &VEHICLE_FAULTS).map_err(usage)?;
-    let plan_faults = a
-        .service
-        .plan_faults()
-        .map_err(|e| MissionError::Usage(e.to_string()))?;
-    let rules = Arc::new(WireRules::new(&world));
+    a.supervisor.policy().map_err(MissionError::Usage)?;
     let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
     let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
     let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(world.seed()));
     std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
     signal::install();
+    // What killed supervisors left behind, and this domain's dead nodes.
+    clean_stale_runs();
+    let mark = RunMark::new(&prefix);
     cleanup_dead_nodes(&domain_config(&prefix)?);
 
     let mut common = vec![
@@ -1129,18 +440,20 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     if a.external.any() {
         announce(a.external, &prefix, &a.vehicle, fingerprint, a.lockstep, &out);
     }
-    let run = if a.planner_process || a.faults > 0 {
-        supervised(a, &opts, &launch, world.sensor_period_s(), fingerprint)
-    } else {
-        threaded(a, opts, fingerprint, cfg, &launch, rules, plan_faults)
-    };
-    if a.external.any() && !wait_for_outside_nodes(&prefix, Duration::from_secs(10))? {
+    let run = supervise(a, &opts, &launch, world.sensor_period_s(), fingerprint);
+    // Outside processes leave when they see the end; the domain is retired
+    // once they have.
+    if a.external.any() && !wait_for_outside_nodes(&prefix, std::time::Duration::from_secs(10))? {
         eprintln!("planner: outside processes are still attached to domain {prefix}");
     }
     let retired = retire_domain(&prefix)?;
     let left = leftover_files(&prefix);
-    if !retired {
+    if retired {
+        drop(mark);
+    } else {
+        // The mark stays, so a later run cleans the domain once it is dead.
         eprintln!("planner: iceoryx2 domain {prefix} still has live nodes; not removed");
+        std::mem::forget(mark);
     }
     let run = run?;
     let last = run.last_state;
@@ -1148,12 +461,27 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let journal = JournalSummary::read(&journal_path).map_err(|e| MissionError::Child(e.to_string()))?;
     let figures = VehicleFigures::of(&journal, last.as_ref(), run.finished);
     let outcome = figures.outcome;
+    let reason = match outcome {
+        Outcome::GoalReached => None,
+        Outcome::TimedOut => Some("the time budget ran out before the goal".to_string()),
+        Outcome::SafeHold => run
+            .supervision
+            .safe_hold
+            .clone()
+            .or_else(|| Some("the vehicle was told to hold".into())),
+        Outcome::Aborted | Outcome::Running if signal::shutdown_requested() => Some(format!(
+            "stopped by signal {} to the supervisor",
+            signal_name(signal::received_signal())
+        )),
+        Outcome::Aborted | Outcome::Running => Some("the vehicle stopped before the mission's end".into()),
+    };
     let stale_plans = last.map_or(0, |s| s.stale_plans);
     let rejected_vehicle = RejectCounters(last.map_or([0; auv_messages::msg::REJECT_KINDS], |s| s.rejected));
     let c = run.totals;
     let trace = run.trace;
     let report = Report {
         outcome,
+        reason,
         time_used_s: figures.time_s,
         time_available_s: budget,
         tasks_completed: figures.tasks,
@@ -1181,7 +509,11 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         time_scale: a.time_scale,
         wall_time_s: wall.elapsed().as_secs_f64(),
         shm_files_left: left.len(),
-        planner_process: a.planner_process,
+        supervision: run.supervision,
+        announced_arrivals: run.announced.route.len().saturating_sub(1),
+        announced_tasks: run.announced.tasks,
+        lost_journal_events: run.announced.missing_from(&journal.route(), journal.tasks()),
+        latency_sessions: c.latency_sessions,
         faults: run.faults,
         vehicle_restarts: journal.restarts(),
         iterations_budget: cfg.iterations,
@@ -1227,8 +559,20 @@ fn journal_visits(journal: &JournalSummary, world: &MissionWorld) -> Vec<super::
     visits
 }
 
+fn signal_name(sig: i32) -> String {
+    match sig {
+        libc::SIGINT => "SIGINT".into(),
+        libc::SIGTERM => "SIGTERM".into(),
+        other => other.to_string(),
+    }
+}
+
+/// Exit code of a mission that stopped in a safe hold.
+pub const EXIT_SAFE_HOLD: u8 = 3;
+
 /// Runs `planner mission`: 0 when the mission ran to its end (goal or time
-/// out: see the report), 1 on an error, 2 on bad arguments, 130 when stopped.
+/// out: see the report), 1 on an error, 2 on bad arguments, 3 when it
+/// stopped in a safe hold, 130 when stopped by a signal.
 pub fn run_mission(a: &MissionArgs) -> ExitCode {
     if a.print_default {
         print!("{}", auv_world::mission_file::DEFAULT_MISSION_TOML);
@@ -1243,10 +587,10 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
                     out.display()
                 );
             }
-            if report.outcome == Outcome::Aborted {
-                ExitCode::from(130)
-            } else {
-                ExitCode::SUCCESS
+            match report.outcome {
+                Outcome::Aborted => ExitCode::from(130),
+                Outcome::SafeHold => ExitCode::from(EXIT_SAFE_HOLD),
+                _ => ExitCode::SUCCESS,
             }
         }
         // A world that cannot be built is bad input (a file or a flag),

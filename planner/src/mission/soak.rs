@@ -6,8 +6,14 @@
 //!   `seed`, fault seed `derive_seed(seed, k)`, in its own iceoryx2 domain
 //!   `<base>k_` and folder `DIR/mission-k`; the same seed gives the same
 //!   missions and the same fault plans.
-//! - Scaled time with `--planner-process` (faults need it); `--lockstep`
-//!   without faults gives reproducible missions.
+//! - Scaled time by default; `--lockstep` without faults gives
+//!   reproducible missions.
+//! - External kills (`--external-kills N`): N SIGKILLs per mission sent by
+//!   a thread of this process that is not the mission's supervisor, to the
+//!   pids the supervisor publishes, at wall times drawn from
+//!   `derive_seed(seed, k)` ([`plan_external_kills`]); the supervisor must
+//!   notice and restart on its own. `soak.json` sets the kills sent next to
+//!   the restarts the missions' reports count by cause.
 //! - Leaks: after each mission its domain is retired and the files it left
 //!   are counted; at the end the whole soak's prefix family is scanned again
 //!   (`shm_files_leaked`). Memory: the peak resident set of each child per
@@ -23,7 +29,10 @@ use std::process::ExitCode;
 use clap::Parser;
 use serde_json::{Value, json};
 
-use super::run::{MissionArgs, mission, rss_kb_of};
+use super::child::rss_kb_of;
+use super::external_kills::{KillTally, plan_external_kills, run_kills};
+use super::run::{MissionArgs, mission};
+use super::supervise::Proc;
 use auv_core::rng::derive_seed;
 use auv_messages::msg::{Outcome, REJECT_KINDS, RejectKind};
 use auv_platform::host::{host_steal_ticks, ms_per_tick};
@@ -61,8 +70,12 @@ pub struct SoakArgs {
     #[arg(long, default_value_t = 3000.0)]
     pub time_scale: f64,
     /// Deterministic lockstep missions (no faults).
-    #[arg(long, conflicts_with = "faults")]
+    #[arg(long, conflicts_with_all = ["faults", "external_kills"])]
     pub lockstep: bool,
+    /// SIGKILLs per mission sent from outside the supervisor to random
+    /// children at random times (seeded), as an operator would.
+    #[arg(long, default_value_t = 0)]
+    pub external_kills: usize,
     /// Stall timeout, real ms.
     #[arg(long, default_value_t = 1000.0)]
     pub stall_timeout_ms: f64,
@@ -120,11 +133,7 @@ fn mission_args(a: &SoakArgs, k: u32, prefix: &str) -> Result<MissionArgs, Strin
     if a.lockstep {
         argv.push("--lockstep".into());
     } else {
-        argv.extend([
-            "--time-scale".into(),
-            a.time_scale.to_string(),
-            "--planner-process".into(),
-        ]);
+        argv.extend(["--time-scale".into(), a.time_scale.to_string()]);
     }
     if a.faults {
         argv.extend([
@@ -148,6 +157,25 @@ fn add(map: &mut BTreeMap<String, u64>, v: &Value) {
             *map.entry(k.clone()).or_default() += n.as_u64().unwrap_or(0);
         }
     }
+}
+
+/// `{process: n}` of a by-process, by-cause table, causes summed.
+fn by_process(m: &[[u64; 2]; 3]) -> Value {
+    let mut o = serde_json::Map::new();
+    for p in Proc::ALL {
+        o.insert(p.name().into(), json!(m[p as usize].iter().sum::<u64>()));
+    }
+    Value::Object(o)
+}
+
+/// `{process: {injected, external}}` of a by-process, by-cause table.
+fn by_cause(m: &[[u64; 2]; 3]) -> Value {
+    let mut o = serde_json::Map::new();
+    for p in Proc::ALL {
+        let [inj, ext] = m[p as usize];
+        o.insert(p.name().into(), json!({"injected": inj, "external": ext}));
+    }
+    Value::Object(o)
 }
 
 /// Runs the soak; the summary as JSON.
@@ -175,6 +203,10 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
     let mut rss_children: Vec<[u64; 3]> = Vec::new();
     let mut rss_self = Vec::new();
     let mut steal_total_ms = host_steal_ticks().map(|_| 0.0);
+    let mut kills = KillTally::default();
+    let mut restarts = [[0u64; 2]; 3];
+    let mut stalls_by_cause = [[0u64; 2]; 3];
+    let (mut safe_holds, mut lost_journal_events) = (0u64, 0u64);
     for k in 0..a.missions {
         if signal::shutdown_requested() {
             break;
@@ -183,8 +215,42 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         let m = mission_args(a, k, &prefix)?;
         let t0 = std::time::Instant::now();
         let steal_before = host_steal_ticks();
-        let line = match mission(&m) {
+        let budget_s = m.scenario.config().map_err(|e| e.to_string())?.time_available_s;
+        let plan = plan_external_kills(
+            derive_seed(a.seed, u64::from(k)),
+            a.external_kills,
+            std::time::Duration::from_secs_f64(budget_s / a.time_scale),
+        );
+        let out_k = m.out.clone().unwrap_or_default();
+        let stop = std::sync::atomic::AtomicBool::new(false);
+        let (result, tally) = std::thread::scope(|scope| {
+            let killer = scope.spawn(|| run_kills(&out_k, &plan, &stop));
+            let r = mission(&m);
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            (r, killer.join().unwrap_or_default())
+        });
+        for i in 0..3 {
+            kills.sent[i] += tally.sent[i];
+            kills.missed[i] += tally.missed[i];
+        }
+        let line = match result {
             Ok((r, _)) => {
+                safe_holds += u64::from(r.outcome == Outcome::SafeHold);
+                lost_journal_events += r.lost_journal_events;
+                for (acc, n) in restarts
+                    .iter_mut()
+                    .flatten()
+                    .zip(r.supervision.restarts.iter().flatten())
+                {
+                    *acc += n;
+                }
+                for (acc, n) in stalls_by_cause
+                    .iter_mut()
+                    .flatten()
+                    .zip(r.supervision.stalls.iter().flatten())
+                {
+                    *acc += n;
+                }
                 let ok = matches!(r.outcome, Outcome::GoalReached | Outcome::TimedOut);
                 completed += u64::from(ok);
                 reached_goal += u64::from(r.goal_reached());
@@ -207,7 +273,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                 add(&mut cleared, &f["cleared_by_kind"]);
                 cut_short += f["cut_short_by_end"].as_u64().unwrap_or(0);
                 skipped_late += f["skipped_late"].as_u64().unwrap_or(0);
-                add(&mut stalls, &f["stalls_detected"]);
+                add(&mut stalls, &by_process(&r.supervision.stalls));
                 json!({
                     "mission": k,
                     "seed": m.scenario.seed.unwrap_or(1),
@@ -218,7 +284,11 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
                     "faults": f["injected_by_kind"],
                     "survived": f["survived_by_kind"],
                     "cleared": f["cleared_by_kind"],
-                    "stalls_detected": f["stalls_detected"],
+                    "stalls_detected": j["supervision"]["stalls"],
+                    "restarts": j["supervision"]["restarts"],
+                    "external_kills_sent": by_process(&tally.sent.map(|n| [0, n])),
+                    "lost_journal_events": r.lost_journal_events,
+                    "reason": j["reason"],
                     "rejected_messages": r.rejected.total() + r.rejected_vehicle.total(),
                     "stale_plans": r.stale_plans,
                     "deadline_misses": r.deadline_misses,
@@ -271,6 +341,18 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
         "faults_cut_short_by_mission_end": cut_short,
         "faults_skipped_late": skipped_late,
         "stalls_detected": stalls,
+        "stalls_by_cause": by_cause(&stalls_by_cause),
+        "safe_hold": safe_holds,
+        "goal_or_safe_hold": reached_goal + safe_holds,
+        "restarts_by_cause": by_cause(&restarts),
+        "external_kills": {
+            "per_mission": a.external_kills,
+            "planned": u64::from(a.missions) * a.external_kills as u64,
+            "sent": kills.sent.iter().sum::<u64>(),
+            "sent_by_process": by_process(&kills.sent.map(|n| [0, n])),
+            "missed_by_process": by_process(&kills.missed.map(|n| [0, n])),
+        },
+        "lost_journal_events": lost_journal_events,
         "rejected_messages": rejected.iter().sum::<u64>(),
         "rejected_messages_by_kind": by_kind,
         "bad_messages": a.bad_messages,
@@ -295,6 +377,7 @@ pub fn soak(a: &SoakArgs) -> Result<Value, String> {
             "faults_per_mission": if a.faults { a.faults_per_mission } else { 0 },
             "nodes": a.nodes,
             "lockstep": a.lockstep,
+            "external_kills": a.external_kills,
             "time_scale": if a.lockstep { Value::Null } else { json!(a.time_scale) },
         },
         "per_mission": per_mission,
@@ -318,7 +401,12 @@ pub fn run_soak(a: &SoakArgs) -> ExitCode {
             }
             println!("{}", serde_json::to_string_pretty(&summary).unwrap_or_default());
             println!("wrote {}", path.display());
-            let ok = v["completed"] == v["missions"] && v["shm_files_leaked"] == 0;
+            // A safe hold is a safe end too: the supervisor stopped a
+            // crash loop as designed.
+            let ok = v["completed"].as_u64().unwrap_or(0) + v["safe_hold"].as_u64().unwrap_or(0)
+                == v["missions"].as_u64().unwrap_or(u64::MAX)
+                && v["shm_files_leaked"] == 0
+                && v["lost_journal_events"] == 0;
             if ok { ExitCode::SUCCESS } else { ExitCode::from(1) }
         }
         Err(e) => {

@@ -1,7 +1,7 @@
-//! Supervision of a mission's processes: a passive monitor of the three
-//! topics (liveness by last-message age, the planner's counters by
-//! session), and the fault injector (SIGKILL + restart, SIGSTOP/SIGCONT)
-//! that `planner mission --faults` and `planner soak` use.
+//! What the mission's supervisor watches and injects: a passive monitor of
+//! the three topics (liveness by last-message age, the planner's counters
+//! by session), and the fault plan (SIGKILL, SIGSTOP/SIGCONT) that
+//! `planner mission --faults` and `planner soak` inject.
 //!
 //! Contract:
 //! - The monitor only subscribes (it never publishes, so it changes nothing
@@ -152,9 +152,10 @@ pub struct Monitor {
     timeouts: [Duration; 3],
     /// Latest status per planner session, in order of first sight.
     sessions: Vec<PlannerStatus>,
-    /// Plan latencies seen in status messages, µs (one per new plan).
-    latencies_us: Vec<u64>,
     last_state: Option<VehicleState>,
+    /// What the vehicle announced on the wire: the longest route any state
+    /// carried and the most tasks any state counted.
+    announced: Announced,
     last_epoch: u64,
     /// The run's scenario: messages from elsewhere, or malformed ones (bad
     /// input injected for tests), are not signs of life.
@@ -174,8 +175,8 @@ impl Monitor {
             live: [Liveness::default(); 3],
             timeouts,
             sessions: Vec::new(),
-            latencies_us: Vec::new(),
             last_state: None,
+            announced: Announced::default(),
             last_epoch: 0,
             fingerprint,
         })
@@ -192,10 +193,12 @@ impl Monitor {
             h.fingerprint == fp && valid.is_ok()
         };
         let mut last_state = self.last_state;
+        let announced = &mut self.announced;
         let _ = self.states.drain(&mut |s: &VehicleState| {
             if good(&s.header, s.validate()) {
                 heard[Proc::Vehicle as usize] = true;
                 last_state = Some(*s);
+                announced.add(s);
             }
         });
         self.last_state = last_state;
@@ -207,25 +210,15 @@ impl Monitor {
             }
         });
         self.last_epoch = epoch;
-        let (sessions, latencies) = (&mut self.sessions, &mut self.latencies_us);
+        let sessions = &mut self.sessions;
         let _ = self.status.drain(&mut |s: &PlannerStatus| {
             if !good(&s.header, s.validate()) {
                 return;
             }
             heard[Proc::Planner as usize] = true;
             match sessions.iter_mut().find(|x| x.header.session == s.header.session) {
-                Some(prev) => {
-                    if s.plans > prev.plans {
-                        latencies.push(s.last_latency_ns / 1000);
-                    }
-                    *prev = *s;
-                }
-                None => {
-                    if s.plans > 0 {
-                        latencies.push(s.last_latency_ns / 1000);
-                    }
-                    sessions.push(*s);
-                }
+                Some(prev) => *prev = *s,
+                None => sessions.push(*s),
             }
         });
         for p in Proc::ALL {
@@ -267,6 +260,11 @@ impl Monitor {
         self.live[p as usize].last.is_some()
     }
 
+    /// How long `p` has been in a reported stall (`None`: it is not).
+    pub fn stalled_for(&self, p: Proc) -> Option<Duration> {
+        self.live[p as usize].stalled_since.map(|t| t.elapsed())
+    }
+
     /// Whether `p` is in a reported stall now.
     pub fn stalled(&self, p: Proc) -> bool {
         self.live[p as usize].stalled_since.is_some()
@@ -275,6 +273,11 @@ impl Monitor {
     /// The vehicle's latest state.
     pub fn last_state(&self) -> Option<&VehicleState> {
         self.last_state.as_ref()
+    }
+
+    /// What the vehicle announced on the wire.
+    pub fn announced(&self) -> &Announced {
+        &self.announced
     }
 
     /// The latest snapshot epoch seen.
@@ -287,7 +290,10 @@ impl Monitor {
         self.sessions.len()
     }
 
-    /// The planner's counters summed over its sessions.
+    /// The planner's counters summed over its sessions. Latency quantiles
+    /// come from each process's own histogram: exact with one planner
+    /// process; after restarts, the largest of the processes' quantiles (an
+    /// upper bound: summaries of separate histograms do not merge exactly).
     pub fn planner_totals(&self) -> PlannerTotals {
         let mut t = PlannerTotals {
             rt_priority: self
@@ -299,6 +305,7 @@ impl Monitor {
                 .and_then(|p| i32::try_from(p).ok()),
             ..PlannerTotals::default()
         };
+        let mut cut = auv_service::core::CutCounters::default();
         for s in &self.sessions {
             t.plans += s.plans;
             t.sensor_updates += s.sensor_updates;
@@ -318,16 +325,46 @@ impl Monitor {
             t.alloc.pool_capacity = t.alloc.pool_capacity.max(s.alloc.pool_capacity);
             t.alloc.pool_misses += s.alloc.pool_misses;
             t.alloc.steady = t.alloc.steady.max(s.alloc.steady);
+            t.latency_us.0 = t.latency_us.0.max(s.latency_p50_ns / 1000);
+            t.latency_us.1 = t.latency_us.1.max(s.latency_p99_ns / 1000);
+            cut.iterations += s.cut_iterations;
+            cut.with_warm_start += s.cut_with_warm_start;
+            cut.weight += s.cut_weight;
+            cut.warm_start_weight += s.cut_warm_start_weight;
         }
-        let mut l = self.latencies_us.clone();
-        l.sort_unstable();
-        let q = |f: f64| {
-            l.get(((l.len() as f64 - 1.0) * f).round() as usize)
-                .copied()
-                .unwrap_or(0)
-        };
-        t.latency_us = (q(0.5), q(0.99), t.max_latency_us);
+        t.latency_us.2 = t.max_latency_us;
+        t.latency_sessions = self.sessions.iter().filter(|s| s.plans > 0).count();
+        t.cut = Some(cut);
         t
+    }
+}
+
+/// What the vehicle's states announced over the whole run (all its
+/// processes): every arrival and task a state reported had been acted on,
+/// so it must be in the journal, which is written before each publish.
+#[derive(Clone, Debug, Default)]
+pub struct Announced {
+    /// The longest route a state carried.
+    pub route: Vec<usize>,
+    /// The most tasks a state counted.
+    pub tasks: u32,
+}
+
+impl Announced {
+    fn add(&mut self, s: &VehicleState) {
+        let route = auv_messages::msg::route_ids(&s.route, s.route_len);
+        if route.len() > self.route.len() {
+            self.route = route.iter().map(|&b| usize::from(b)).collect();
+        }
+        self.tasks = self.tasks.max(s.tasks_completed);
+    }
+
+    /// Announced events the journal does not have: arrivals past the part
+    /// of the announced route the journal's route agrees with, and tasks
+    /// beyond the journal's count.
+    pub fn missing_from(&self, journal_route: &[usize], journal_tasks: u32) -> u64 {
+        let common = self.route.iter().zip(journal_route).take_while(|(a, b)| a == b).count();
+        (self.route.len() - common) as u64 + u64::from(self.tasks.saturating_sub(journal_tasks))
     }
 }
 
@@ -348,14 +385,15 @@ pub struct PlannerTotals {
     pub iterations_total: u64,
     /// Largest latency, µs.
     pub max_latency_us: u64,
-    /// Latency p50, p99 (from the status messages seen), max, µs.
+    /// Latency p50, p99, max, µs (see [`Monitor::planner_totals`]).
     pub latency_us: (u64, u64, u64),
+    /// Planner processes whose plans the latency figures summarise.
+    pub latency_sessions: usize,
     /// Rejected input by kind.
     pub rejected: RejectCounters,
     /// Allocation counters, summed over the planner's processes.
     pub alloc: AllocCounters,
-    /// What the deadline cuts cost (`None`: not measured, the planner ran
-    /// as a child and its status message does not carry these).
+    /// What the deadline cuts cost (`None`: no status seen).
     pub cut: Option<auv_service::core::CutCounters>,
     /// SCHED_FIFO priority every planner process ran its service thread at
     /// (the lowest; `None` when one ran on normal scheduling or none reported).
@@ -372,10 +410,6 @@ pub struct FaultReport {
     /// Faults the mission came through, by key: a killed process restarted
     /// and heard from again, a paused one detected and heard from again.
     pub cleared: std::collections::BTreeMap<String, u64>,
-    /// Stalls detected, by process.
-    pub stalls: std::collections::BTreeMap<String, u64>,
-    /// Restarts, by process.
-    pub restarts: std::collections::BTreeMap<String, u64>,
     /// SIGSTOP → stall detected, ms: the largest.
     pub detect_ms_max: f64,
     /// The stall timeouts, ms, by process.
@@ -416,8 +450,6 @@ impl FaultReport {
             "cleared_by_kind": self.cleared,
             "cut_short_by_end": self.injected_total().saturating_sub(cleared),
             "skipped_late": self.skipped_late,
-            "stalls_detected": self.stalls,
-            "restarts": self.restarts,
             "stall_detect_ms_max": self.detect_ms_max,
             "stall_timeout_ms": {
                 "planner": self.timeouts_ms[0],
@@ -444,6 +476,17 @@ mod tests {
         assert!(only.iter().all(|f| f.target == Proc::Sensor));
         assert!(plan_faults(5, 3, 1000.0, &[]).is_empty());
         assert_eq!(a[0].key(), format!("{}_{}", a[0].kind.name(), a[0].target.name()));
+    }
+
+    #[test]
+    fn announced_events_missing_from_the_journal_are_counted() {
+        let a = Announced {
+            route: vec![0, 3, 5],
+            tasks: 2,
+        };
+        assert_eq!(a.missing_from(&[0, 3, 5, 7], 3), 0);
+        assert_eq!(a.missing_from(&[0, 3], 2), 1);
+        assert_eq!(a.missing_from(&[0, 4, 5], 1), 3);
     }
 
     #[test]
