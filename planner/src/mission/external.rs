@@ -27,10 +27,10 @@ use auv_transport::ipc::{any_node_alive, cleanup_dead_nodes, domain_config};
 pub struct ExternalArgs {
     /// Do not start vehicle-sim: wait for an outside vehicle (e.g.
     /// clients/python/examples/vehicle.py) on the run's --ipc-prefix.
-    #[arg(long, conflicts_with_all = ["planner_process", "faults", "inject_vehicle"])]
+    #[arg(long, conflicts_with_all = ["faults", "inject_vehicle"])]
     pub external_vehicle: bool,
     /// Do not start sensor-sim: wait for an outside sensor on the run's --ipc-prefix.
-    #[arg(long, conflicts_with_all = ["planner_process", "faults", "inject_sensor"])]
+    #[arg(long, conflicts_with_all = ["faults", "inject_sensor"])]
     pub external_sensor: bool,
 }
 
