@@ -24,4 +24,5 @@ pub mod solution;
 pub mod solver;
 pub mod transport;
 pub mod truncnorm;
+pub mod tsplib;
 pub mod wire;

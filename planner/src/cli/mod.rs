@@ -21,6 +21,7 @@ use planner::instance::{Instance, InstanceError};
 use planner::oplib::OpError;
 use planner::problem::ProblemError;
 use planner::scenario::{ConfigError, LoadError};
+use planner::tsplib::TsplibError;
 
 /// Seed used when `--seed` is not given (our choice; any fixed value would
 /// do). The output always reports the seed it used.
@@ -81,6 +82,14 @@ pub enum CliError {
         path: PathBuf,
         /// What is wrong, with line and column.
         source: OpError,
+    },
+    /// A malformed OPLib (TSPLIB-based orienteering) file.
+    #[error("{}: {source}", path.display())]
+    Oplib {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, with the line.
+        source: TsplibError,
     },
     /// A scenario file breaks the `auv-scenario/1` format.
     #[error("{}: {source}", path.display())]
@@ -180,6 +189,36 @@ pub fn collect_files(dir: &Path, extensions: &[&str], files: &mut Vec<PathBuf>) 
         }
     }
     Ok(())
+}
+
+/// Reads a benchmark file as an instance: a classic orienteering `.txt`
+/// (Tsiligirides, Chao) or an OPLib `.oplib`, each in its documented
+/// encoding; the instance is named after the file. `None` for any other
+/// extension.
+pub fn load_benchmark(path: &Path) -> Option<Result<Instance, CliError>> {
+    let file = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    let name = planner::oplib::instance_name(file);
+    let ext = path.extension().and_then(|e| e.to_str())?;
+    let read = || read_text(path);
+    Some(match ext {
+        "txt" => read().and_then(|text| {
+            planner::oplib::parse_op(&text)
+                .map(|op| op.to_instance(name))
+                .map_err(|source| CliError::Op {
+                    path: path.to_path_buf(),
+                    source,
+                })
+        }),
+        "oplib" => read().and_then(|text| {
+            planner::tsplib::parse_oplib(&text)
+                .map(|op| op.to_instance(name))
+                .map_err(|source| CliError::Oplib {
+                    path: path.to_path_buf(),
+                    source,
+                })
+        }),
+        _ => return None,
+    })
 }
 
 /// Reads and validates an `auv-route-instance/1` file.

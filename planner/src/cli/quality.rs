@@ -27,7 +27,7 @@ use std::time::{Duration, Instant};
 use clap::ValueEnum;
 use planner::instance::{Instance, Objective};
 use planner::montecarlo::thread_cpu_time_s;
-use planner::oplib::{BestKnown, instance_name, parse_op};
+use planner::oplib::{BestKnown, instance_name};
 use planner::problem::Problem;
 use planner::rng::PlannerRng;
 use planner::route::{Route, RouteEval};
@@ -166,20 +166,13 @@ fn best_known(dir: &Path) -> Result<Option<BestKnown>, CliError> {
 }
 
 /// Reads an instance: JSON in the interchange format, or a classic
-/// orienteering `.txt` converted on the fly.
+/// orienteering `.txt` or OPLib `.oplib` file converted on the fly.
 fn load(path: &Path) -> Result<(String, Instance), CliError> {
-    let stem = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-    if path.extension().is_some_and(|e| e == "txt") {
-        let name = instance_name(stem).to_owned();
-        let text = read_text(path)?;
-        let op = parse_op(&text).map_err(|source| CliError::Op {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let inst = op.to_instance(&name);
-        Ok((name, inst))
+    let file = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    if let Some(inst) = super::load_benchmark(path) {
+        Ok((instance_name(file).to_owned(), inst?))
     } else {
-        let name = stem.strip_suffix(".json").unwrap_or(stem).to_owned();
+        let name = file.strip_suffix(".json").unwrap_or(file).to_owned();
         Ok((name, load_instance(path)?))
     }
 }
@@ -266,10 +259,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         return Err(CliError::Usage("--deadline-ms: give at least one deadline".into()));
     }
     let mut files = Vec::new();
-    super::collect_files(&args.instances, &["json", "txt"], &mut files)?;
+    super::collect_files(&args.instances, &["json", "txt", "oplib"], &mut files)?;
     if files.is_empty() {
         return Err(CliError::Usage(format!(
-            "--instances {}: no instance files (*.json, *.txt) in the folder",
+            "--instances {}: no instance files (*.json, *.txt, *.oplib) in the folder",
             args.instances.display()
         )));
     }
