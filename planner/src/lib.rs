@@ -15,6 +15,7 @@ pub mod montecarlo;
 pub mod msg;
 pub mod oplib;
 pub mod plot;
+pub mod plot_quality;
 pub mod problem;
 pub mod rng;
 pub mod route;
