@@ -316,15 +316,19 @@ impl Solver for Auto {
         self.restarts = 0;
         self.moves.set_objective(problem);
         self.ruin_cap = self.settings.ruin_min;
-        self.construct(problem, rng);
-        if problem.better(&self.best_eval, &self.cur_eval) {
-            self.cur = self.best;
-            self.cur_eval = self.best_eval;
-        }
     }
 
     fn step(&mut self, problem: &Problem, rng: &mut PlannerRng) -> bool {
         self.steps += 1;
+        // The constructive start runs in the first step, so `start` stays as
+        // cheap as the swarm's.
+        if self.steps == 1 {
+            self.construct(problem, rng);
+            if problem.better(&self.best_eval, &self.cur_eval) {
+                self.cur = self.best;
+                self.cur_eval = self.best_eval;
+            }
+        }
         if self.settings.swarm_every > 0 && self.steps.is_multiple_of(self.settings.swarm_every) {
             self.swarm_step(problem, rng);
         }
