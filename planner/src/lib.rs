@@ -12,4 +12,5 @@
 pub mod mission;
 pub mod montecarlo;
 pub mod plot;
+pub mod plot_quality;
 pub mod serve;

@@ -47,7 +47,7 @@ pub struct Panel<'a> {
 }
 
 /// Colours of successive series / routes: distinguishable, print-friendly.
-const PALETTE: [RGBColor; 6] = [
+pub(crate) const PALETTE: [RGBColor; 6] = [
     RGBColor(214, 39, 40),
     RGBColor(31, 119, 180),
     RGBColor(44, 160, 44),

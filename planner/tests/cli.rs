@@ -658,7 +658,64 @@ fn bad_input_convert_op_missing_input_or_empty_folder() {
     let empty = dir.join("empty");
     std::fs::create_dir_all(&empty).unwrap();
     let out = planner(&["convert-op", path_str(&empty), "--out", path_str(&dir.join("o"))]);
-    assert_input_error(&out, &["no .txt benchmark files"]);
+    assert_input_error(&out, &["no .txt or .oplib benchmark files"]);
+}
+
+#[test]
+fn convert_op_reads_oplib_files_in_their_documented_encoding() {
+    let dir = scratch("convert-oplib");
+    let src = format!("{DATA}/oplib/gen2/gr48-gen2-50.oplib");
+    let out = planner(&["convert-op", &src, "--out", path_str(&dir)]);
+    assert_ok(&out);
+    assert!(stdout(&out).contains("49 nodes, budget 2523.5"), "{}", stdout(&out));
+    let text = std::fs::read_to_string(dir.join("gr48-gen2-50.json")).unwrap();
+    let inst = Instance::from_json(&text).unwrap();
+    // The depot (city 1) is the start; its copy, node 48, the goal.
+    assert_eq!((inst.start, inst.goal), (0, 48));
+    assert_eq!(inst.nodes[48].prize, 0.0);
+    assert_eq!(inst.edges.len(), 49 * 48 / 2);
+    // gr48's matrix starts 0 / 593 0 / 409 258 0 (LOWER_DIAG_ROW).
+    assert_eq!(inst.edge_between(0, 1).unwrap().task_time_s, 593.0);
+    assert_eq!(inst.edge_between(1, 2).unwrap().task_time_s, 258.0);
+    assert_eq!(inst.edge_between(2, 48).unwrap().task_time_s, 409.0);
+    // A whole folder converts, and `quality` reads the files directly.
+    let out = planner(&[
+        "convert-op",
+        &format!("{DATA}/oplib"),
+        "--out",
+        path_str(&dir.join("all")),
+    ]);
+    assert_ok(&out);
+    assert!(dir.join("all/gen1/att48-gen1-50.json").is_file());
+    let csv = dir.join("q.csv");
+    let out = planner(&[
+        "quality",
+        "--instances",
+        &format!("{DATA}/oplib"),
+        "--algorithms",
+        "auto",
+        "--deadline-ms",
+        "2",
+        "--out",
+        path_str(&csv),
+    ]);
+    assert_ok(&out);
+    let table = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(
+        table.lines().filter(|l| l.contains(",best_known,")).count(),
+        6,
+        "{table}"
+    );
+}
+
+#[test]
+fn bad_input_oplib_names_the_line() {
+    let dir = scratch("oplib-bad");
+    let text = std::fs::read_to_string(format!("{DATA}/oplib/gen1/eil51-gen1-50.oplib")).unwrap();
+    let broken = dir.join("broken.oplib");
+    std::fs::write(&broken, text.replacen("\n3 ", "\n3 x", 1)).unwrap();
+    let out = planner(&["convert-op", path_str(&broken), "--out", path_str(&dir.join("o.json"))]);
+    assert_input_error(&out, &["broken.oplib", "line", "is invalid"]);
 }
 
 fn export_with_scenario(test: &str, scenario: &Value) -> Output {
@@ -854,8 +911,7 @@ fn montecarlo_rejects_bad_arguments() {
     assert!(!out_dir.exists(), "nothing is written for rejected arguments");
 }
 
-const QUALITY_HEADER: &str =
-    "instance,deadline_ms,algorithm,score,optimum,gap,gap_bound,solve_ms,feasible,optimum_source";
+const QUALITY_HEADER: &str = "instance,deadline_ms,algorithm,score,optimum,gap,gap_bound,solve_ms,feasible,optimum_source,family,time_to_best_ms";
 
 /// Runs `planner quality --instances DIR FLAGS… --out CSV`, which must
 /// succeed and write the documented header; returns its stdout and the
@@ -890,6 +946,9 @@ fn quality_reports_gaps_on_classic_instances() {
         "p99 ms",
         "auto",
         "pso",
+        "per family, auto",
+        "tsiligirides_set1",
+        "to best (median)",
     ] {
         assert!(text.contains(needle), "{needle:?} missing from:\n{text}");
     }
@@ -906,6 +965,13 @@ fn quality_reports_gaps_on_classic_instances() {
         assert_eq!(r[6], r[5], "a known optimum certifies the gap itself");
         assert_eq!(r[8], "true");
         assert_eq!(r[9], "best_known");
+        // The time to the best-known score is within the solve, when reached.
+        if gap <= 1e-6 {
+            let at: f64 = r[11].parse().unwrap();
+            assert!(at <= r[7].parse::<f64>().unwrap() + 1e-3, "{r:?}");
+        } else {
+            assert_eq!(r[11], "", "{r:?}");
+        }
     }
 }
 

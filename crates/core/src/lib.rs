@@ -18,3 +18,4 @@ pub mod rng;
 pub mod route;
 pub mod solution;
 pub mod solver;
+pub mod tsplib;

@@ -306,9 +306,17 @@ pub struct BestKnown {
 
 const BEST_KNOWN_HEADER: &str = "set,instance,n_nodes,tmax,best_known_score,proved_optimal";
 
-/// The instance name of a benchmark file name: the name without `.txt`.
+/// The header of OPLib's table (`shared/benchmarks/oplib/best_known.csv`):
+/// the same facts, in another order and with a file column.
+const OPLIB_BEST_KNOWN_HEADER: &str = "file,instance,generation,dimension,cost_limit,best_known_score,proved_optimal";
+
+/// The instance name of a benchmark file name: the name without `.txt`
+/// (classic files) or `.oplib` (OPLib files).
 pub fn instance_name(file_name: &str) -> &str {
-    file_name.strip_suffix(".txt").unwrap_or(file_name)
+    file_name
+        .strip_suffix(".txt")
+        .or_else(|| file_name.strip_suffix(".oplib"))
+        .unwrap_or(file_name)
 }
 
 impl BestKnown {
@@ -317,20 +325,29 @@ impl BestKnown {
     /// the free-text `source` column is ignored).
     pub fn parse(text: &str) -> Result<Self, BestKnownError> {
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
-        match lines.next() {
-            Some((_, h)) if h.starts_with(BEST_KNOWN_HEADER) => {}
+        let oplib = match lines.next() {
+            Some((_, h)) if h.starts_with(BEST_KNOWN_HEADER) => false,
+            Some((_, h)) if h.starts_with(OPLIB_BEST_KNOWN_HEADER) => true,
             _ => {
                 return Err(BestKnownError::Header {
                     expected: BEST_KNOWN_HEADER,
                 });
             }
-        }
+        };
         let mut entries = BTreeMap::new();
         for (line, row) in lines.filter(|(_, l)| !l.trim().is_empty()) {
             let bad = |what: String| BestKnownError::Row { line, what };
             // The last column is free text; splitting at most 7 ways keeps
             // any comma inside it out of the numeric columns.
-            let cols: Vec<&str> = row.splitn(7, ',').map(str::trim).collect();
+            let mut cols: Vec<&str> = row.splitn(7, ',').map(str::trim).collect();
+            if oplib {
+                if cols.len() < 7 {
+                    return Err(bad(format!("expected 7 columns, found {}", cols.len())));
+                }
+                // file,instance,generation,dimension,cost_limit,score,proved
+                // → set (the generation),instance,n_nodes,tmax,score,proved.
+                cols = vec![cols[2], cols[1], cols[3], cols[4], cols[5], cols[6]];
+            }
             if cols.len() < 6 {
                 return Err(bad(format!("expected at least 6 columns, found {}", cols.len())));
             }

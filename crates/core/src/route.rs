@@ -98,6 +98,48 @@ impl Route {
         &self.nodes[..self.len]
     }
 
+    /// Inserts `id` at position `i ≤ len`, shifting the rest back (caller
+    /// keeps len < MAX_NODES).
+    #[inline]
+    pub fn insert(&mut self, i: usize, id: usize) {
+        self.nodes.copy_within(i..self.len, i + 1);
+        self.nodes[i] = id as u8;
+        self.len += 1;
+    }
+
+    /// Removes the node at position `i < len`.
+    #[inline]
+    pub fn remove(&mut self, i: usize) {
+        self.nodes.copy_within(i + 1..self.len, i);
+        self.len -= 1;
+    }
+
+    /// Reverses the positions `i..=j` (`i ≤ j < len`).
+    #[inline]
+    pub fn reverse(&mut self, i: usize, j: usize) {
+        self.nodes[i..=j].reverse();
+    }
+
+    /// Moves the `l` nodes at positions `i..i + l` to stand right after the
+    /// node now at position `k` (outside the segment), reversed when `rev`.
+    pub fn relocate(&mut self, i: usize, l: usize, k: usize, rev: bool) {
+        debug_assert!(l <= 3 && !(i..i + l).contains(&k) && k + 1 != i);
+        let mut seg = [0u8; 3];
+        seg[..l].copy_from_slice(&self.nodes[i..i + l]);
+        if rev {
+            seg[..l].reverse();
+        }
+        if k < i {
+            // Shift k+1..i back by l, then place the segment after k.
+            self.nodes.copy_within(k + 1..i, k + 1 + l);
+            self.nodes[k + 1..k + 1 + l].copy_from_slice(&seg[..l]);
+        } else {
+            // Shift i+l..=k forward by l, then place the segment before k+1.
+            self.nodes.copy_within(i + l..k + 1, i);
+            self.nodes[k + 1 - l..k + 1].copy_from_slice(&seg[..l]);
+        }
+    }
+
     /// Copies the ids into a `Vec` (reporting, not hot paths).
     pub fn to_vec(&self) -> Vec<usize> {
         self.iter().collect()
@@ -347,5 +389,46 @@ mod equality_tests {
         let b = Route::from_slice(&[0, 5]).unwrap();
         assert_eq!(a, b);
         assert_ne!(a, Route::from_slice(&[0, 5, 9]).unwrap());
+    }
+
+    #[test]
+    fn in_place_edits_match_their_definitions() {
+        let base = [0, 1, 2, 3, 4, 5, 6, 7];
+        let r = Route::from_slice(&base).unwrap();
+        let mut x = r;
+        x.insert(3, 9);
+        assert_eq!(x.to_vec(), vec![0, 1, 2, 9, 3, 4, 5, 6, 7]);
+        x.remove(3);
+        assert_eq!(x, r);
+        x.reverse(2, 5);
+        assert_eq!(x.to_vec(), vec![0, 1, 5, 4, 3, 2, 6, 7]);
+        for l in 1..=3 {
+            for i in 1..base.len() - l {
+                for k in 0..base.len() - 1 {
+                    if (i - 1..i + l).contains(&k) {
+                        continue;
+                    }
+                    for rev in [false, true] {
+                        let mut seg: Vec<usize> = base[i..i + l].to_vec();
+                        if rev {
+                            seg.reverse();
+                        }
+                        let mut want = Vec::new();
+                        for (x, &v) in base.iter().enumerate() {
+                            if (i..i + l).contains(&x) {
+                                continue;
+                            }
+                            want.push(v);
+                            if x == k {
+                                want.extend(&seg);
+                            }
+                        }
+                        let mut got = r;
+                        got.relocate(i, l, k, rev);
+                        assert_eq!(got.to_vec(), want, "i {i} l {l} k {k} rev {rev}");
+                    }
+                }
+            }
+        }
     }
 }

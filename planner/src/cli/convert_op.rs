@@ -1,23 +1,25 @@
-//! `planner convert-op`: convert classic orienteering benchmark files
-//! (`shared/benchmarks/op/`) into `auv-route-instance/1` JSON.
+//! `planner convert-op`: convert orienteering benchmark files into
+//! `auv-route-instance/1` JSON: the classic sets (`shared/benchmarks/op/`,
+//! `.txt`) and OPLib's TSPLIB-based files (`shared/benchmarks/oplib/`,
+//! `.oplib`), each in its documented encoding.
 //!
 //! Contract: a single file is written to `--out` (or into `--out` when that
-//! is an existing folder); a folder is searched recursively for `.txt`
-//! files, each written as `<name>.json` at the same relative place under
-//! `--out`. The instance is named after the file (without `.txt`). Files are
+//! is an existing folder); a folder is searched recursively for `.txt` and
+//! `.oplib` files, each written as `<name>.json` at the same relative place
+//! under `--out`. The instance is named after the file (without its
+//! extension). Files are
 //! processed in sorted order and the first malformed one stops the run with
 //! its path, line and column.
 
 use std::path::{Path, PathBuf};
 
-use auv_core::oplib::parse_op;
-
-use super::{CliError, print, read_text, write_text};
+use super::{CliError, print, write_text};
 
 /// Arguments of `planner convert-op`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A benchmark file, or a folder searched recursively for `.txt` files.
+    /// A benchmark file (`.txt` or `.oplib`), or a folder searched
+    /// recursively for them.
     #[arg(value_name = "FILE|DIR")]
     pub input: PathBuf,
     /// Output JSON file (or an existing folder) for one input file; output
@@ -58,14 +60,23 @@ fn stem(file: &Path) -> String {
 
 /// Converts one file; returns a short description of what was written.
 fn convert_file(input: &Path, out: &Path) -> Result<String, CliError> {
-    let text = read_text(input)?;
-    let op = parse_op(&text).map_err(|source| CliError::Op {
-        path: input.to_path_buf(),
-        source,
+    let inst = super::load_benchmark(input).unwrap_or_else(|| {
+        Err(CliError::Usage(format!(
+            "{}: not a benchmark file (expected .txt or .oplib)",
+            input.display()
+        )))
     })?;
-    let inst = op.to_instance(&stem(input));
     write_text(out, &(inst.to_json() + "\n"))?;
-    Ok(format!("{} nodes, Tmax {}", inst.nodes.len(), op.tmax))
+    let oplib = input.extension().is_some_and(|e| e == "oplib");
+    Ok(if oplib {
+        format!(
+            "{} nodes, budget {} (COST_LIMIT + 0.5)",
+            inst.nodes.len(),
+            inst.time_available_s
+        )
+    } else {
+        format!("{} nodes, Tmax {}", inst.nodes.len(), inst.time_available_s)
+    })
 }
 
 fn convert_tree(root: &Path, out_root: &Path) -> Result<(), CliError> {
@@ -77,10 +88,10 @@ fn convert_tree(root: &Path, out_root: &Path) -> Result<(), CliError> {
         )));
     }
     let mut files = Vec::new();
-    super::collect_files(root, &["txt"], &mut files)?;
+    super::collect_files(root, &["txt", "oplib"], &mut files)?;
     if files.is_empty() {
         return Err(CliError::Usage(format!(
-            "no .txt benchmark files under {}",
+            "no .txt or .oplib benchmark files under {}",
             root.display()
         )));
     }

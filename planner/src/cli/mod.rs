@@ -22,6 +22,7 @@ use auv_core::instance::{Instance, InstanceError};
 use auv_core::oplib::OpError;
 use auv_core::problem::ProblemError;
 use auv_world::scenario::{ConfigError, LoadError};
+use auv_core::tsplib::TsplibError;
 
 /// Seed used when `--seed` is not given (our choice; any fixed value would
 /// do). The output always reports the seed it used.
@@ -82,6 +83,14 @@ pub enum CliError {
         path: PathBuf,
         /// What is wrong, with line and column.
         source: OpError,
+    },
+    /// A malformed OPLib (TSPLIB-based orienteering) file.
+    #[error("{}: {source}", path.display())]
+    Oplib {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, with the line.
+        source: TsplibError,
     },
     /// A scenario file breaks the `auv-scenario/1` format.
     #[error("{}: {source}", path.display())]
@@ -184,6 +193,36 @@ pub fn collect_files(dir: &Path, extensions: &[&str], files: &mut Vec<PathBuf>) 
         }
     }
     Ok(())
+}
+
+/// Reads a benchmark file as an instance: a classic orienteering `.txt`
+/// (Tsiligirides, Chao) or an OPLib `.oplib`, each in its documented
+/// encoding; the instance is named after the file. `None` for any other
+/// extension.
+pub fn load_benchmark(path: &Path) -> Option<Result<Instance, CliError>> {
+    let file = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    let name = auv_core::oplib::instance_name(file);
+    let ext = path.extension().and_then(|e| e.to_str())?;
+    let read = || read_text(path);
+    Some(match ext {
+        "txt" => read().and_then(|text| {
+            auv_core::oplib::parse_op(&text)
+                .map(|op| op.to_instance(name))
+                .map_err(|source| CliError::Op {
+                    path: path.to_path_buf(),
+                    source,
+                })
+        }),
+        "oplib" => read().and_then(|text| {
+            auv_core::tsplib::parse_oplib(&text)
+                .map(|op| op.to_instance(name))
+                .map_err(|source| CliError::Oplib {
+                    path: path.to_path_buf(),
+                    source,
+                })
+        }),
+        _ => return None,
+    })
 }
 
 /// Reads and validates an `auv-route-instance/1` file.

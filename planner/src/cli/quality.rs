@@ -1,9 +1,10 @@
 //! `planner quality`: solves every instance in a folder with each algorithm
 //! under each deadline and reports the gap to the optimum.
 //!
-//! Contract: instances are every `*.json` (`auv-route-instance/1`) and
-//! every classic orienteering `*.txt` file under `--instances` (recursively,
-//! sorted by path, so runs are reproducible). The optimum of an instance is
+//! Contract: instances are every `*.json` (`auv-route-instance/1`), every
+//! classic orienteering `*.txt` and every OPLib `*.oplib` file under
+//! `--instances` (recursively, sorted by path, so runs are reproducible);
+//! an instance's family is its folder under `--instances`. The optimum of an instance is
 //! taken from the first `best_known.csv` found in the folder or above it
 //! (matched by instance name); else the exact solver computes it
 //! (score-only order, `--exact-time-limit` per instance, warm-started from
@@ -12,8 +13,12 @@
 //! (so `gap` is a lower bound on the true gap) and `gap_bound` is the
 //! certified upper bound on the gap from the search's bound. Gaps are in
 //! percent of the optimum: lost weight for `max_weight`, extra cost for
-//! `paper_cost`. One CSV row per instance × deadline × algorithm; the
-//! summary per deadline and algorithm goes to standard output.
+//! `paper_cost`. One CSV row per instance × deadline × algorithm, with the
+//! solve time at which the best-so-far first reached the optimum's score
+//! (`time_to_best_ms`); the summary per deadline and algorithm, then per
+//! family and deadline for the first algorithm (with the median time to the
+//! best-known score at the longest deadline), goes to standard output, and
+//! `--plot` draws each family's mean gap against the deadline.
 //!
 //! Every algorithm gets the same seed; `auto` runs until the deadline, PSO
 //! and BBO run the paper's budget cut at the deadline. `--clock cpu`
@@ -24,15 +29,16 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use clap::ValueEnum;
 use auv_core::instance::{Instance, Objective};
-use auv_core::oplib::{BestKnown, instance_name, parse_op};
+use auv_platform::clock::thread_cpu_time_s;
+use auv_core::oplib::{BestKnown, instance_name};
+use planner::plot_quality::{GapCurve, gap_curves};
 use auv_core::problem::Problem;
 use auv_core::rng::PlannerRng;
 use auv_core::route::{Route, RouteEval};
 use auv_core::solver::exact::{ExactSettings, solve_exact};
-use auv_core::solver::{self, Algorithm, Budget, Solver};
-use auv_platform::clock::thread_cpu_time_s;
-use clap::ValueEnum;
+use auv_core::solver::{Algorithm, Solver};
 
 use super::{CliError, DEFAULT_SEED, load_instance, print, read_text, write_text};
 
@@ -72,6 +78,10 @@ pub struct Args {
     /// CSV file to write (one row per instance, deadline and algorithm).
     #[arg(long, value_name = "FILE.csv")]
     pub out: PathBuf,
+    /// Also draw the mean gap of each family (sub-folder) against the
+    /// deadline for the first algorithm (SVG).
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Where an instance's optimum comes from.
@@ -116,6 +126,11 @@ impl Optimum {
 /// One solve's figures.
 struct Row {
     instance: String,
+    /// The instance's folder under `--instances` (`.` for the folder itself).
+    family: String,
+    /// Solve time at which the best-so-far first reached the optimum's
+    /// score, if it did.
+    time_to_best: Option<Duration>,
     deadline_ms: u64,
     algorithm: Algorithm,
     score: f64,
@@ -166,20 +181,13 @@ fn best_known(dir: &Path) -> Result<Option<BestKnown>, CliError> {
 }
 
 /// Reads an instance: JSON in the interchange format, or a classic
-/// orienteering `.txt` converted on the fly.
+/// orienteering `.txt` or OPLib `.oplib` file converted on the fly.
 fn load(path: &Path) -> Result<(String, Instance), CliError> {
-    let stem = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-    if path.extension().is_some_and(|e| e == "txt") {
-        let name = instance_name(stem).to_owned();
-        let text = read_text(path)?;
-        let op = parse_op(&text).map_err(|source| CliError::Op {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let inst = op.to_instance(&name);
-        Ok((name, inst))
+    let file = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    if let Some(inst) = super::load_benchmark(path) {
+        Ok((instance_name(file).to_owned(), inst?))
     } else {
-        let name = stem.strip_suffix(".json").unwrap_or(stem).to_owned();
+        let name = file.strip_suffix(".json").unwrap_or(file).to_owned();
         Ok((name, load_instance(path)?))
     }
 }
@@ -201,8 +209,10 @@ fn parse_seconds(flag: &str, text: &str) -> Result<Duration, CliError> {
     }
 }
 
-/// Runs `solver` within `deadline` on `clock`; returns the solve time on
-/// that clock. With the wall clock this is exactly [`solver::run`].
+/// Runs `solver` within `deadline` on `clock` (the loop of
+/// [`solver::run`], the clock chosen here); returns the solve time on that
+/// clock and, in `trace`, the time of every improvement of the best-so-far
+/// with its figures (the anytime curve).
 fn solve_timed(
     s: &mut dyn Solver,
     problem: &Problem,
@@ -210,30 +220,30 @@ fn solve_timed(
     iterations: u32,
     deadline: Duration,
     clock: Clock,
+    trace: &mut Vec<(Duration, RouteEval)>,
 ) -> Duration {
-    match clock {
-        Clock::Wall => {
-            let budget = Budget {
-                iterations,
-                deadline: Some(Instant::now() + deadline),
-            };
-            solver::run(s, problem, rng, None, budget).elapsed
+    let wall0 = Instant::now();
+    let cpu0 = thread_cpu_time_s();
+    let now = || match clock {
+        Clock::Wall => wall0.elapsed(),
+        Clock::Cpu => Duration::from_secs_f64((thread_cpu_time_s() - cpu0).max(0.0)),
+    };
+    trace.clear();
+    s.start(problem, rng, None);
+    trace.push((now(), *s.best().1));
+    let mut done = 0;
+    while done < iterations && now() < deadline {
+        done += 1;
+        let go_on = s.step(problem, rng);
+        let e = *s.best().1;
+        if trace.last().is_none_or(|(_, b)| problem.better(&e, b)) {
+            trace.push((now(), e));
         }
-        Clock::Cpu => {
-            // Same loop as `solver::run`, the deadline on the thread's CPU clock.
-            let t0 = thread_cpu_time_s();
-            let end = t0 + deadline.as_secs_f64();
-            s.start(problem, rng, None);
-            let mut done = 0;
-            while done < iterations && thread_cpu_time_s() < end {
-                done += 1;
-                if !s.step(problem, rng) {
-                    break;
-                }
-            }
-            Duration::from_secs_f64((thread_cpu_time_s() - t0).max(0.0))
+        if !go_on {
+            break;
         }
     }
+    now()
 }
 
 /// Runs `planner quality`.
@@ -266,19 +276,26 @@ pub fn run(args: Args) -> Result<(), CliError> {
         return Err(CliError::Usage("--deadline-ms: give at least one deadline".into()));
     }
     let mut files = Vec::new();
-    super::collect_files(&args.instances, &["json", "txt"], &mut files)?;
+    super::collect_files(&args.instances, &["json", "txt", "oplib"], &mut files)?;
     if files.is_empty() {
         return Err(CliError::Usage(format!(
-            "--instances {}: no instance files (*.json, *.txt) in the folder",
+            "--instances {}: no instance files (*.json, *.txt, *.oplib) in the folder",
             args.instances.display()
         )));
     }
     let known = best_known(&args.instances)?;
     let mut solvers: Vec<_> = algorithms.iter().map(|&a| (a, a.build(a.paper_iterations()))).collect();
     let mut rows = Vec::new();
+    let mut trace = Vec::with_capacity(4096);
     let mut exact_runs: Vec<(bool, Duration)> = Vec::new();
     for path in &files {
         let (name, inst) = load(path)?;
+        let family = path
+            .parent()
+            .and_then(|d| d.strip_prefix(&args.instances).ok())
+            .map(|d| d.display().to_string())
+            .filter(|d| !d.is_empty())
+            .unwrap_or_else(|| ".".to_owned());
         let problem = Problem::from_instance(&inst).map_err(|source| CliError::Problem {
             path: path.clone(),
             source,
@@ -302,12 +319,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
                     iterations,
                     Duration::from_millis(d),
                     args.clock,
+                    &mut trace,
                 );
                 let (r, e) = s.best();
                 if e.feasible && best.as_ref().is_none_or(|(_, b)| problem.better(e, b)) {
                     best = Some((*r, *e));
                 }
-                results.push((d, *a, *e, t));
+                results.push((d, *a, *e, t, trace.clone()));
             }
         }
         let optimum = match known.as_ref().and_then(|k| k.get(&name)) {
@@ -342,10 +360,19 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 }
             }
         };
-        for (d, a, e, t) in results {
+        for (d, a, e, t, tr) in results {
             let sc = score(&inst, &e);
+            let time_to_best = optimum.value().and_then(|o| {
+                tr.iter()
+                    .find(|(_, x)| {
+                        x.feasible && gap_percent(inst.objective, score(&inst, x), o, true) <= AT_OPT_PERCENT
+                    })
+                    .map(|(at, _)| *at)
+            });
             rows.push(Row {
                 instance: name.clone(),
+                family: family.clone(),
+                time_to_best,
                 deadline_ms: d,
                 algorithm: a,
                 score: sc,
@@ -357,12 +384,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
             });
         }
     }
-    let mut csv =
-        String::from("instance,deadline_ms,algorithm,score,optimum,gap,gap_bound,solve_ms,feasible,optimum_source\n");
+    let mut csv = String::from(
+        "instance,deadline_ms,algorithm,score,optimum,gap,gap_bound,solve_ms,feasible,optimum_source,family,time_to_best_ms\n",
+    );
     for r in &rows {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{:.3},{},{}",
+            "{},{},{},{},{},{},{},{:.3},{},{},{},{}",
             r.instance,
             r.deadline_ms,
             r.algorithm,
@@ -372,7 +400,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
             r.gap_bound.map_or(String::new(), |g| format!("{g:.4}")),
             r.solve.as_secs_f64() * 1e3,
             r.feasible,
-            r.optimum.source()
+            r.optimum.source(),
+            r.family,
+            r.time_to_best
+                .map_or(String::new(), |t| format!("{:.3}", t.as_secs_f64() * 1e3))
         );
     }
     write_text(&args.out, &csv)?;
@@ -403,7 +434,89 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let mine: Vec<&Row> = rows.iter().filter(|r| r.deadline_ms == d).collect();
         text.push_str(&summary(&mine, &algorithms, d));
     }
+    let families = family_table(&rows, algorithms[0], &deadlines);
+    text.push_str(&families.0);
+    if let Some(plot) = &args.plot {
+        let curves: Vec<GapCurve<'_>> = families
+            .1
+            .iter()
+            .map(|(f, pts)| GapCurve {
+                family: f,
+                points: pts.clone(),
+            })
+            .collect();
+        let title = format!("{}: mean gap per family against the deadline", algorithms[0]);
+        gap_curves(plot, &title, &curves).map_err(|e| CliError::Usage(e.to_string()))?;
+        let _ = writeln!(text, "wrote {}", plot.display());
+    }
     print(&text)
+}
+
+/// A gap at most this (percent) counts as reaching the optimum (rounding).
+const AT_OPT_PERCENT: f64 = 1e-6;
+
+/// Per family (sub-folder) and deadline, for `algorithm`: mean and worst
+/// gap and the instances at the optimum; then the time to reach the
+/// optimum's score within the longest deadline (median over the instances
+/// that reached it, and how many did). Returns the table and each family's
+/// (deadline, mean gap) curve.
+#[allow(clippy::type_complexity)]
+fn family_table(rows: &[Row], algorithm: Algorithm, deadlines: &[u64]) -> (String, Vec<(String, Vec<(f64, f64)>)>) {
+    let mut families: Vec<&str> = rows.iter().map(|r| r.family.as_str()).collect();
+    families.sort_unstable();
+    families.dedup();
+    let mut sorted = deadlines.to_vec();
+    sorted.sort_unstable();
+    let longest = sorted.last().copied().unwrap_or(0);
+    let mut text = format!("per family, {algorithm}: mean gap % / worst gap % / at optimum, per deadline\n");
+    let _ = write!(text, "{:<28}", "family");
+    for d in &sorted {
+        let _ = write!(text, " {:>22}", format!("{d} ms"));
+    }
+    let _ = writeln!(text, " {:>18}", "to best (median)");
+    let mut curves = Vec::new();
+    for f in families {
+        let _ = write!(text, "{f:<28}");
+        let mut pts = Vec::new();
+        for &d in &sorted {
+            let gaps: Vec<f64> = rows
+                .iter()
+                .filter(|r| r.family == f && r.deadline_ms == d && r.algorithm == algorithm)
+                .filter_map(|r| r.gap)
+                .collect();
+            if gaps.is_empty() {
+                let _ = write!(text, " {:>22}", "-");
+                continue;
+            }
+            let mean = gaps.iter().sum::<f64>() / gaps.len() as f64;
+            let worst = gaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let hits = gaps.iter().filter(|&&g| g <= AT_OPT_PERCENT).count();
+            let _ = write!(
+                text,
+                " {:>22}",
+                format!("{mean:.3} / {worst:.2} / {hits}/{}", gaps.len())
+            );
+            pts.push((d as f64, mean));
+        }
+        let mut times: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.family == f && r.deadline_ms == longest && r.algorithm == algorithm)
+            .filter_map(|r| r.time_to_best.map(|t| t.as_secs_f64() * 1e3))
+            .collect();
+        let total = rows
+            .iter()
+            .filter(|r| r.family == f && r.deadline_ms == longest && r.algorithm == algorithm && r.gap.is_some())
+            .count();
+        let reached = times.len();
+        let med = if times.is_empty() {
+            "-".to_owned()
+        } else {
+            format!("{:.2} ms", percentile(&mut times, 50.0))
+        };
+        let _ = writeln!(text, " {:>18}", format!("{med} ({reached}/{total})"));
+        curves.push((f.to_owned(), pts));
+    }
+    (text, curves)
 }
 
 /// The per-algorithm table of one deadline.

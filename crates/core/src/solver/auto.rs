@@ -36,6 +36,7 @@
 //! re-building find in microseconds.
 
 use super::Solver;
+use super::ils::{Moves, Ruin};
 use super::local::LocalSearch;
 use super::pso::{Pso, PsoSettings};
 use crate::problem::{MAX_NODES, NodeSet, Problem};
@@ -78,6 +79,20 @@ pub struct AutoSettings {
     /// solves at the best-known score against 164 uncapped, 2 seeds); the
     /// 40-node snapshots' routes are short enough not to notice.
     pub ruin_max: usize,
+    /// The ruin size cap after a new best (it grows by one every
+    /// `grow_every` kicks without one, up to `ruin_max`).
+    pub ruin_min: usize,
+    /// Kicks without a new best per step of the ruin size cap.
+    pub grow_every: u32,
+    /// Noise of greedy insertion: each node's value per second is scaled
+    /// by a factor in [1, 1 + noise), so kicks differ.
+    pub noise: f64,
+    /// A swarm generation every this many steps (0: never).
+    pub swarm_every: u32,
+    /// Largest network whose new best routes get the deep polish.
+    pub deep_polish_max_n: usize,
+    /// Longest segment the kicks' or-opt moves (0–3).
+    pub or_opt_segment: usize,
 }
 
 impl Default for AutoSettings {
@@ -91,6 +106,12 @@ impl Default for AutoSettings {
             fresh_every: 4,
             accept: 0.03,
             ruin_max: 10,
+            ruin_min: 3,
+            grow_every: 8,
+            noise: 0.3,
+            swarm_every: 1,
+            deep_polish_max_n: MAX_NODES,
+            or_opt_segment: 1,
         }
     }
 }
@@ -103,16 +124,21 @@ pub struct Auto {
     settings: AutoSettings,
     pso: Pso,
     ls: LocalSearch,
+    moves: Moves,
+    /// Current ruin size cap: grows while kicks find nothing, back to its
+    /// base on a new best (adaptive removal size).
+    ruin_cap: usize,
     /// The swarm's best figures when last polished.
     polished_from: RouteEval,
     /// Iterated local search: current route and figures.
     cur: Route,
     cur_eval: RouteEval,
     trial: Route,
-    scratch: Route,
     best: Route,
     best_eval: RouteEval,
     stale: u32,
+    /// Steps since `start`.
+    steps: u32,
     /// Restarts since `start`.
     restarts: u32,
 }
@@ -128,14 +154,16 @@ impl Auto {
                 ..PsoSettings::paper()
             }),
             ls: LocalSearch::new(),
+            moves: Moves::new(),
+            ruin_cap: 2,
             polished_from: super::WORST,
             cur: Route::new(),
             cur_eval: super::WORST,
             trial: Route::new(),
-            scratch: Route::new(),
             best: Route::new(),
             best_eval: super::WORST,
             stale: 0,
+            steps: 0,
             restarts: 0,
         }
     }
@@ -151,7 +179,13 @@ impl Auto {
     fn offer(&mut self, p: &Problem, route: &Route, e: RouteEval) -> bool {
         if p.better(&e, &self.best_eval) {
             let (mut r, mut e) = (*route, e);
-            if self.ls.improve_deep(p, &mut r, &mut e, self.settings.polish_passes) && p.better(&e, &self.cur_eval) {
+            let deep = self.settings.deep_polish_max_n >= p.n();
+            let changed = if deep {
+                self.ls.improve_deep(p, &mut r, &mut e, self.settings.polish_passes)
+            } else {
+                self.ls.improve(p, &mut r, &mut e, self.settings.polish_passes)
+            };
+            if changed && p.better(&e, &self.cur_eval) {
                 self.cur = r;
                 self.cur_eval = e;
             }
@@ -162,36 +196,36 @@ impl Auto {
         false
     }
 
+    /// Rebuilds `trial` after a ruin: shorten, refill (the removed nodes
+    /// barred first, so the route changes), shorten, refill, polish.
+    fn recreate(&mut self, p: &Problem, e: &mut RouteEval, barred: NodeSet, rng: &mut PlannerRng) {
+        let (noise, seg) = (self.settings.noise, self.settings.or_opt_segment);
+        self.moves.shorten(p, &mut self.trial, e, SHORTEN_ROUNDS, seg);
+        self.moves.fill(p, &mut self.trial, e, barred, noise, rng);
+        self.moves.fill(p, &mut self.trial, e, NodeSet::EMPTY, noise, rng);
+        if self.moves.shorten(p, &mut self.trial, e, SHORTEN_ROUNDS, seg) {
+            self.moves.fill(p, &mut self.trial, e, NodeSet::EMPTY, 0.0, rng);
+        }
+        self.ls.improve(p, &mut self.trial, e, self.settings.polish_passes);
+    }
+
     /// One ruin-and-recreate kick of the iterated local search.
     fn kick(&mut self, p: &Problem, rng: &mut PlannerRng) {
         let len = self.cur.len();
-        let mut barred = NodeSet::EMPTY;
         self.trial = self.cur;
-        if len >= 3 {
-            let interior = len - 2;
-            let i = 1 + rng.below(interior as u32) as usize;
-            let max_seg = (interior / 3).clamp(2, self.settings.ruin_max.max(2)).min(len - 1 - i);
-            let mut seg = 1 + rng.below(max_seg as u32) as usize;
-            // Shrink until the route closes over the gap.
-            while seg > 0 && !p.has_edge(self.cur.get(i - 1), self.cur.get(i + seg)) {
-                seg -= 1;
-            }
-            if seg > 0 {
-                self.trial.clear();
-                for k in (0..len).filter(|k| !(i..i + seg).contains(k)) {
-                    self.trial.push(self.cur.get(k));
-                }
-                for k in i..i + seg {
-                    barred.insert(self.cur.get(k));
-                }
-            }
-        }
-        let Some(mut e) = p.evaluate(&self.trial) else {
-            return;
+        let mut e = self.cur_eval;
+        let interior = len.saturating_sub(2);
+        // Short routes (paper_cost favours few long edges) may lose their
+        // whole interior: a cap of half the route would never leave them.
+        let cap = self.ruin_cap.min(interior).max(1);
+        let size = 1 + rng.below(cap as u32) as usize;
+        let shape = match rng.below(3) {
+            0 => Ruin::Segment,
+            1 => Ruin::Random,
+            _ => Ruin::Cluster,
         };
-        recreate(p, &mut self.trial, &mut self.scratch, &mut e, barred, rng);
-        recreate(p, &mut self.trial, &mut self.scratch, &mut e, NodeSet::EMPTY, rng);
-        self.ls.improve(p, &mut self.trial, &mut e, self.settings.polish_passes);
+        let barred = self.moves.ruin(p, &mut self.trial, &mut e, shape, size, rng);
+        self.recreate(p, &mut e, barred, rng);
         // Record-to-record travel: take the trial when within `accept` of
         // the best score, so the search can cross shallow valleys.
         let floor = p.score(&self.best_eval) - self.settings.accept * p.score(&self.best_eval).abs();
@@ -202,8 +236,12 @@ impl Auto {
         let trial = self.trial;
         if self.offer(p, &trial, e) {
             self.stale = 0;
+            self.ruin_cap = self.settings.ruin_min;
         } else {
             self.stale += 1;
+            if self.stale.is_multiple_of(self.settings.grow_every.max(1)) {
+                self.ruin_cap = (self.ruin_cap + 1).min(self.settings.ruin_max.max(2));
+            }
             if self.stale >= self.settings.restart_after {
                 self.stale = 0;
                 self.cur = self.best;
@@ -216,8 +254,7 @@ impl Auto {
                     && let Some(mut e) = p.evaluate(&r)
                 {
                     self.trial = r;
-                    recreate(p, &mut self.trial, &mut self.scratch, &mut e, NodeSet::EMPTY, rng);
-                    self.ls.improve(p, &mut self.trial, &mut e, self.settings.polish_passes);
+                    self.recreate(p, &mut e, NodeSet::EMPTY, rng);
                     if e.feasible {
                         self.cur = self.trial;
                         self.cur_eval = e;
@@ -228,82 +265,35 @@ impl Auto {
             }
         }
     }
+
+    /// The constructive start: greedy insertion by value per second from
+    /// the bare start → goal leg, shortened and refilled, polished.
+    fn construct(&mut self, p: &Problem, rng: &mut PlannerRng) {
+        let (Some(r), true) = (
+            Route::from_slice(&[p.start(), p.goal()]),
+            p.has_edge(p.start(), p.goal()),
+        ) else {
+            return;
+        };
+        let Some(mut e) = p.evaluate(&r) else {
+            return;
+        };
+        self.trial = r;
+        self.recreate(p, &mut e, NodeSet::EMPTY, rng);
+        if p.better(&e, &self.best_eval) {
+            self.best = self.trial;
+            self.best_eval = e;
+        }
+    }
 }
+
+/// Rounds of [`Moves::shorten`] per call, at most (a bound on a step's
+/// work; a route that needs more keeps shortening in the next kick).
+const SHORTEN_ROUNDS: u32 = 8;
 
 impl Default for Auto {
     fn default() -> Self {
         Self::new(AutoSettings::default())
-    }
-}
-
-#[inline]
-fn all_nodes(n: usize) -> u128 {
-    if n >= MAX_NODES { u128::MAX } else { (1u128 << n) - 1 }
-}
-
-/// Greedy insertion: while some free node (not on the route, not excluded,
-/// not `barred`) fits in the time budget, inserts the one with the most
-/// weight gained per second added (times a noise factor in [1, 1.3) per
-/// node, so kicks differ). `route` must be feasible with figures `e`;
-/// `e` is kept exact by re-evaluation.
-fn recreate(
-    p: &Problem,
-    route: &mut Route,
-    scratch: &mut Route,
-    e: &mut RouteEval,
-    barred: NodeSet,
-    rng: &mut PlannerRng,
-) {
-    if !e.feasible {
-        return;
-    }
-    let limit = p.budget_limit_s();
-    loop {
-        let mut on_route = NodeSet::EMPTY;
-        for u in route.iter() {
-            on_route.insert(u);
-        }
-        let free = NodeSet(all_nodes(p.n()) & !on_route.0 & !p.excluded().0 & !barred.0);
-        if free.is_empty() {
-            return;
-        }
-        let mut best: Option<(usize, usize, f64)> = None;
-        for v in free.iter() {
-            let noise = 1.0 + 0.3 * rng.next_f64();
-            let nv = p.neighbours(v);
-            for k in 0..route.len() - 1 {
-                let (a, b) = (route.get(k), route.get(k + 1));
-                if !(nv.contains(a) && nv.contains(b)) {
-                    continue;
-                }
-                let dt = p.time_s(a, v) + p.time_s(v, b) - p.time_s(a, b);
-                if e.time_s + dt > limit {
-                    continue;
-                }
-                let dw = p.gain(a, v) + p.gain(v, b) - p.gain(a, b);
-                let ratio = noise * dw / dt.max(1e-9);
-                if best.is_none_or(|(_, _, r)| ratio > r) {
-                    best = Some((k, v, ratio));
-                }
-            }
-        }
-        let Some((k, v, _)) = best else {
-            return;
-        };
-        scratch.clear();
-        for j in 0..route.len() {
-            scratch.push(route.get(j));
-            if j == k {
-                scratch.push(v);
-            }
-        }
-        match p.evaluate(scratch) {
-            Some(x) if x.feasible => {
-                core::mem::swap(route, scratch);
-                *e = x;
-            }
-            _ => return,
-        }
     }
 }
 
@@ -322,25 +312,25 @@ impl Solver for Auto {
         self.cur_eval = *e;
         self.polished_from = super::WORST;
         self.stale = 0;
+        self.steps = 0;
         self.restarts = 0;
+        self.moves.set_objective(problem);
+        self.ruin_cap = self.settings.ruin_min;
     }
 
     fn step(&mut self, problem: &Problem, rng: &mut PlannerRng) -> bool {
-        self.pso.step(problem, rng);
-        let (r, e) = self.pso.best();
-        let (r, e) = (*r, *e);
-        if problem.better(&e, &self.polished_from) {
-            let (mut cand, mut ce) = (r, e);
-            self.ls
-                .improve(problem, &mut cand, &mut ce, self.settings.polish_passes);
-            if problem.better(&ce, &e) {
-                self.pso.adopt(&cand, ce);
+        self.steps += 1;
+        // The constructive start runs in the first step, so `start` stays as
+        // cheap as the swarm's.
+        if self.steps == 1 {
+            self.construct(problem, rng);
+            if problem.better(&self.best_eval, &self.cur_eval) {
+                self.cur = self.best;
+                self.cur_eval = self.best_eval;
             }
-            self.polished_from = ce;
-            if self.offer(problem, &cand, ce) && problem.better(&ce, &self.cur_eval) {
-                self.cur = cand;
-                self.cur_eval = ce;
-            }
+        }
+        if self.settings.swarm_every > 0 && self.steps.is_multiple_of(self.settings.swarm_every) {
+            self.swarm_step(problem, rng);
         }
         if self.best_eval.feasible {
             for _ in 0..self.settings.kicks {
@@ -357,6 +347,29 @@ impl Solver for Auto {
 
     fn best(&self) -> (&Route, &RouteEval) {
         (&self.best, &self.best_eval)
+    }
+}
+
+impl Auto {
+    /// One generation of the swarm; its best, when it improved, is
+    /// polished, offered and written back.
+    fn swarm_step(&mut self, problem: &Problem, rng: &mut PlannerRng) {
+        self.pso.step(problem, rng);
+        let (r, e) = self.pso.best();
+        let (r, e) = (*r, *e);
+        if problem.better(&e, &self.polished_from) {
+            let (mut cand, mut ce) = (r, e);
+            self.ls
+                .improve(problem, &mut cand, &mut ce, self.settings.polish_passes);
+            if problem.better(&ce, &e) {
+                self.pso.adopt(&cand, ce);
+            }
+            self.polished_from = ce;
+            if self.offer(problem, &cand, ce) && problem.better(&ce, &self.cur_eval) {
+                self.cur = cand;
+                self.cur_eval = ce;
+            }
+        }
     }
 }
 
@@ -391,28 +404,5 @@ mod tests {
             checked += 1;
         }
         assert!(checked >= 6);
-    }
-
-    #[test]
-    fn recreate_only_adds_feasible_nodes() {
-        let inst = random_instance(40, 0.4, 31_000.0, 3);
-        let p = Problem::from_instance(&inst).unwrap();
-        let mut r = Route::from_slice(&[p.start(), p.goal()]).unwrap();
-        let Some(mut e) = p.evaluate(&r) else {
-            return; // start and goal not adjacent on this network
-        };
-        let before = e;
-        let mut scratch = Route::new();
-        recreate(
-            &p,
-            &mut r,
-            &mut scratch,
-            &mut e,
-            NodeSet::EMPTY,
-            &mut PlannerRng::new(1),
-        );
-        assert_eq!(p.evaluate(&r), Some(e));
-        assert!(e.feasible);
-        assert!(r.len() > 2 && e.weight > before.weight);
     }
 }

@@ -21,8 +21,10 @@
 pub mod auto;
 pub mod bbo;
 pub mod exact;
+pub mod ils;
 mod lanes;
 pub mod local;
+pub mod objective;
 pub mod pso;
 
 use std::time::{Duration, Instant};

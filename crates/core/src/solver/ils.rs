@@ -1,0 +1,514 @@
+//! The fast moves of `auto`'s ruin-and-recreate search, for routes of up to
+//! [`MAX_NODES`] nodes on complete or sparse, metric or non-metric networks.
+//!
+//! - [`Moves::shorten`]: 2-opt (segment reversal) and or-opt (move a segment
+//!   of 1–3 nodes, either way round), first improvement, until no move
+//!   shortens the route without losing objective value apart from time
+//!   (orienteering's "shorten, then insert": the time freed is what the next
+//!   insertion spends).
+//! - [`Moves::fill`]: greedy insertion by objective value per second
+//!   ([`Value::insertion_ratio`]) with noise, each free node's best place
+//!   cached and updated only where the route changed, so a fill costs about
+//!   O(free nodes) per insertion instead of O(free · route).
+//! - [`Moves::ruin`]: removes a random segment, random nodes, or the route
+//!   nodes nearest a random one (the three usual ruin shapes).
+//!
+//! Contract: routes stay simple paths start → goal over existing edges; no
+//! move makes a feasible route infeasible (times are checked against the
+//! budget with a margin for rounding, and the figures are re-evaluated
+//! exactly at the end of each call); no heap allocation; every random choice
+//! from the caller's generator; nothing assumes the triangle inequality.
+
+use super::objective::Value;
+use crate::problem::{MAX_NODES, NodeSet, Problem};
+use crate::rng::PlannerRng;
+use crate::route::{Route, RouteEval};
+
+/// Scratch of the moves (no heap).
+pub struct Moves {
+    /// The objective's value of route changes.
+    value: Value,
+    /// Route position of each node on the route.
+    pos: [u8; MAX_NODES],
+    /// Best insertion ratio of each free node (−∞: none fits).
+    ratio: [f64; MAX_NODES],
+    /// The route node after which that best insertion goes.
+    after: [u8; MAX_NODES],
+    /// Its time change.
+    dt: [f64; MAX_NODES],
+    /// Per-fill noise factor of each node.
+    noise: [f64; MAX_NODES],
+}
+
+impl Default for Moves {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Smallest change that counts (s, or objective units), against rounding.
+const EPS: f64 = 1e-9;
+
+/// Which ruin shape [`Moves::ruin`] used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ruin {
+    /// A run of consecutive nodes.
+    Segment,
+    /// Nodes drawn at random.
+    Random,
+    /// The nodes nearest (by edge time) to a random route node.
+    Cluster,
+}
+
+impl Moves {
+    /// Scratch ready for use.
+    pub fn new() -> Self {
+        Self {
+            value: Value::new(crate::instance::Objective::MaxWeight),
+            pos: [0; MAX_NODES],
+            ratio: [f64::NEG_INFINITY; MAX_NODES],
+            after: [0; MAX_NODES],
+            dt: [0.0; MAX_NODES],
+            noise: [1.0; MAX_NODES],
+        }
+    }
+
+    /// Sets the objective the moves value changes by (call once per problem).
+    pub fn set_objective(&mut self, p: &Problem) {
+        self.value = Value::of(p);
+    }
+
+    /// 2-opt and or-opt until no move shortens the route without a loss of
+    /// time-independent value (or improves that value without lengthening
+    /// it), or `max_rounds` rounds. `e` is re-evaluated exactly. Returns
+    /// whether the route changed.
+    pub fn shorten(
+        &mut self,
+        p: &Problem,
+        route: &mut Route,
+        e: &mut RouteEval,
+        max_rounds: u32,
+        max_segment: usize,
+    ) -> bool {
+        let v = &self.value;
+        let accept = |dt: f64, sd: f64| (sd > EPS && dt <= EPS) || (sd >= -EPS && dt < -EPS);
+        let ew = |a: usize, b: usize| p.gain(a, b) - p.prize(b);
+        let mut changed = false;
+        for _ in 0..max_rounds {
+            let mut improved = false;
+            let len = route.len();
+            // 2-opt: reverse i..=j; only the two boundary edges change
+            // (edges are undirected; prizes stay with their nodes). Every
+            // improving reversal met in the sweep is applied at once.
+            for i in 1..len.saturating_sub(2) {
+                let a = route.get(i - 1);
+                let mut j = i + 1;
+                while j < len - 1 {
+                    let (ui, uj, b) = (route.get(i), route.get(j), route.get(j + 1));
+                    if p.has_edge(a, uj) && p.has_edge(ui, b) {
+                        let dt = p.time_s(a, uj) + p.time_s(ui, b) - p.time_s(a, ui) - p.time_s(uj, b);
+                        let dw = ew(a, uj) + ew(ui, b) - ew(a, ui) - ew(uj, b);
+                        let dr = p.risk_ratio(a, uj) + p.risk_ratio(ui, b) - p.risk_ratio(a, ui) - p.risk_ratio(uj, b);
+                        if accept(dt, v.static_delta(dw, dr)) {
+                            route.reverse(i, j);
+                            improved = true;
+                        }
+                    }
+                    j += 1;
+                }
+            }
+            if !improved {
+                improved = Self::or_opt(p, v, route, max_segment.min(3), &accept);
+            }
+            if !improved {
+                break;
+            }
+            changed = true;
+        }
+        if changed && let Some(x) = p.evaluate(route) {
+            *e = x;
+        }
+        changed
+    }
+
+    /// The first improving or-opt move found, applied.
+    fn or_opt(
+        p: &Problem,
+        v: &Value,
+        route: &mut Route,
+        max_segment: usize,
+        accept: &impl Fn(f64, f64) -> bool,
+    ) -> bool {
+        let len = route.len();
+        let ew = |a: usize, b: usize| p.gain(a, b) - p.prize(b);
+        let fig = |a: usize, b: usize| (p.time_s(a, b), ew(a, b), p.risk_ratio(a, b));
+        for l in 1..=max_segment {
+            for i in 1..len.saturating_sub(l) {
+                let (a, b) = (route.get(i - 1), route.get(i + l));
+                if !p.has_edge(a, b) {
+                    continue;
+                }
+                let (h, t) = (route.get(i), route.get(i + l - 1));
+                let (ah, tb, ab) = (fig(a, h), fig(t, b), fig(a, b));
+                let out = (ah.0 + tb.0 - ab.0, ah.1 + tb.1 - ab.1, ah.2 + tb.2 - ab.2);
+                for k in 0..len - 1 {
+                    if (i - 1..i + l).contains(&k) {
+                        continue;
+                    }
+                    let (c, d) = (route.get(k), route.get(k + 1));
+                    let cd = fig(c, d);
+                    for rev in [false, true] {
+                        if rev && l == 1 {
+                            break;
+                        }
+                        let (x, y) = if rev { (t, h) } else { (h, t) };
+                        if !(p.has_edge(c, x) && p.has_edge(y, d)) {
+                            continue;
+                        }
+                        let (cx, yd) = (fig(c, x), fig(y, d));
+                        let dt = cx.0 + yd.0 - cd.0 - out.0;
+                        let dw = cx.1 + yd.1 - cd.1 - out.1;
+                        let dr = cx.2 + yd.2 - cd.2 - out.2;
+                        if accept(dt, v.static_delta(dw, dr)) {
+                            route.relocate(i, l, k, rev);
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    /// Best place to insert `u` on `route` (its ratio, the node before and
+    /// the time change), given `time_s` of route time and `limit`.
+    #[inline]
+    fn best_place(
+        p: &Problem,
+        v: &Value,
+        route: &Route,
+        u: usize,
+        noise: f64,
+        time_s: f64,
+        limit: f64,
+    ) -> (f64, u8, f64) {
+        let nu = p.neighbours(u);
+        let mut best = (f64::NEG_INFINITY, 0u8, 0.0);
+        for k in 0..route.len() - 1 {
+            let (a, b) = (route.get(k), route.get(k + 1));
+            if !(nu.contains(a) && nu.contains(b)) {
+                continue;
+            }
+            let dt = p.time_s(a, u) + p.time_s(u, b) - p.time_s(a, b);
+            if time_s + dt > limit {
+                continue;
+            }
+            let dw = p.gain(a, u) + p.gain(u, b) - p.gain(a, b);
+            let dr = p.risk_ratio(a, u) + p.risk_ratio(u, b) - p.risk_ratio(a, b);
+            if v.delta(dt, dw, dr) <= 0.0 {
+                continue;
+            }
+            let r = v.noisy_insertion_ratio(dt, dw, dr, noise);
+            if r > best.0 {
+                best = (r, a as u8, dt);
+            }
+        }
+        best
+    }
+
+    /// Greedy insertion: while some free node (not on the route, not
+    /// excluded, not `barred`) fits and is worth inserting, inserts the one
+    /// with the best value per second, its time-independent part scaled by
+    /// a noise factor in [1, 1 + `noise`) drawn per node and call
+    /// ([`Value::noisy_insertion_ratio`]); only insertions that gain are made. `route` must be feasible
+    /// with figures `e`; `e` is re-evaluated exactly. Returns the number of
+    /// nodes inserted.
+    pub fn fill(
+        &mut self,
+        p: &Problem,
+        route: &mut Route,
+        e: &mut RouteEval,
+        barred: NodeSet,
+        noise: f64,
+        rng: &mut PlannerRng,
+    ) -> u32 {
+        let v = self.value;
+        let v = &v;
+        if !e.feasible {
+            return 0;
+        }
+        // A margin below the budget so that rounding in the running sum
+        // never makes the exact re-evaluation infeasible.
+        let limit = p.budget_limit_s() - EPS * p.budget_s();
+        let mut on_route = NodeSet::EMPTY;
+        for (k, u) in route.iter().enumerate() {
+            on_route.insert(u);
+            self.pos[u] = k as u8;
+        }
+        let all = if p.n() >= MAX_NODES {
+            u128::MAX
+        } else {
+            (1u128 << p.n()) - 1
+        };
+        let mut free = NodeSet(all & !on_route.0 & !p.excluded().0 & !barred.0);
+        let mut time_s = e.time_s;
+        for u in free.iter() {
+            self.noise[u] = if noise > 0.0 { 1.0 + noise * rng.next_f64() } else { 1.0 };
+            (self.ratio[u], self.after[u], self.dt[u]) = Self::best_place(p, v, route, u, self.noise[u], time_s, limit);
+        }
+        let mut inserted = 0;
+        loop {
+            let mut pick = usize::MAX;
+            let mut best = 0.0;
+            for u in free.iter() {
+                if self.ratio[u] > best {
+                    best = self.ratio[u];
+                    pick = u;
+                }
+            }
+            if pick == usize::MAX {
+                break;
+            }
+            let a = self.after[pick] as usize;
+            let k = self.pos[a] as usize;
+            let b = route.get(k + 1);
+            route.insert(k + 1, pick);
+            time_s += self.dt[pick];
+            free.remove(pick);
+            inserted += 1;
+            for (j, u) in route.iter().enumerate().skip(k + 1) {
+                self.pos[u] = j as u8;
+            }
+            // Update the other free nodes: a node whose best place was the
+            // edge a–b just split, or which no longer fits there, is placed
+            // afresh; the others only compare the two new edges.
+            for u in free.iter() {
+                let placed = self.ratio[u] > f64::NEG_INFINITY;
+                let stale = placed && (self.after[u] as usize == a || time_s + self.dt[u] > limit);
+                if stale {
+                    (self.ratio[u], self.after[u], self.dt[u]) =
+                        Self::best_place(p, v, route, u, self.noise[u], time_s, limit);
+                    continue;
+                }
+                let nu = p.neighbours(u);
+                for (x, y) in [(a, pick), (pick, b)] {
+                    if !(nu.contains(x) && nu.contains(y)) {
+                        continue;
+                    }
+                    let dt = p.time_s(x, u) + p.time_s(u, y) - p.time_s(x, y);
+                    if time_s + dt > limit {
+                        continue;
+                    }
+                    let dw = p.gain(x, u) + p.gain(u, y) - p.gain(x, y);
+                    let dr = p.risk_ratio(x, u) + p.risk_ratio(u, y) - p.risk_ratio(x, y);
+                    if v.delta(dt, dw, dr) <= 0.0 {
+                        continue;
+                    }
+                    let r = v.noisy_insertion_ratio(dt, dw, dr, self.noise[u]);
+                    if r > self.ratio[u] {
+                        (self.ratio[u], self.after[u], self.dt[u]) = (r, x as u8, dt);
+                    }
+                }
+            }
+        }
+        if inserted > 0
+            && let Some(x) = p.evaluate(route)
+        {
+            *e = x;
+        }
+        inserted
+    }
+
+    /// Removes up to `size` interior nodes of `route` in the given shape
+    /// (a removal is skipped where the neighbours share no edge or where it
+    /// would make a feasible route infeasible) and returns the removed set.
+    /// `e` is re-evaluated exactly.
+    pub fn ruin(
+        &mut self,
+        p: &Problem,
+        route: &mut Route,
+        e: &mut RouteEval,
+        shape: Ruin,
+        size: usize,
+        rng: &mut PlannerRng,
+    ) -> NodeSet {
+        let mut removed = NodeSet::EMPTY;
+        let interior = route.len().saturating_sub(2);
+        if interior == 0 || size == 0 {
+            return removed;
+        }
+        let size = size.min(interior);
+        // Without the triangle inequality (task times on edges, rounded or
+        // explicit distances) a removal can lengthen the route: only those
+        // that keep a feasible route feasible are made.
+        let limit = if e.feasible {
+            p.budget_limit_s() - EPS * p.budget_s()
+        } else {
+            f64::INFINITY
+        };
+        let mut time_s = e.time_s;
+        let remove_at = |route: &mut Route, i: usize, removed: &mut NodeSet, time_s: &mut f64| -> bool {
+            let (a, u, b) = (route.get(i - 1), route.get(i), route.get(i + 1));
+            if !p.has_edge(a, b) {
+                return false;
+            }
+            let t = *time_s + p.time_s(a, b) - p.time_s(a, u) - p.time_s(u, b);
+            if t > limit {
+                return false;
+            }
+            *time_s = t;
+            removed.insert(u);
+            route.remove(i);
+            true
+        };
+        match shape {
+            Ruin::Segment => {
+                // Nodes one by one from a random position: the gap closes
+                // over each removal, so the result is the same segment
+                // removed where every step is allowed.
+                let i = 1 + rng.below(interior as u32) as usize;
+                for _ in 0..size {
+                    if i + 1 >= route.len() || !remove_at(route, i, &mut removed, &mut time_s) {
+                        break;
+                    }
+                }
+            }
+            Ruin::Random => {
+                for _ in 0..size {
+                    let inner = route.len() - 2;
+                    if inner == 0 {
+                        break;
+                    }
+                    let i = 1 + rng.below(inner as u32) as usize;
+                    remove_at(route, i, &mut removed, &mut time_s);
+                }
+            }
+            Ruin::Cluster => {
+                let c = route.get(1 + rng.below(interior as u32) as usize);
+                let mut tried = NodeSet::EMPTY;
+                for _ in 0..size {
+                    // The nearest remaining interior node to c (c first).
+                    let mut best = (f64::INFINITY, 0usize);
+                    for i in 1..route.len() - 1 {
+                        let u = route.get(i);
+                        let t = if u == c { -1.0 } else { p.time_s(c, u) };
+                        if t < best.0 && !tried.contains(u) {
+                            best = (t, i);
+                        }
+                    }
+                    if best.1 == 0 {
+                        break;
+                    }
+                    tried.insert(route.get(best.1));
+                    remove_at(route, best.1, &mut removed, &mut time_s);
+                }
+            }
+        }
+        if !removed.is_empty()
+            && let Some(x) = p.evaluate(route)
+        {
+            *e = x;
+        }
+        removed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixtures::random_instance;
+    use crate::instance::Objective;
+
+    fn problems() -> Vec<Problem> {
+        let mut out = Vec::new();
+        for seed in 0..16u64 {
+            for objective in [Objective::MaxWeight, Objective::PaperCost { phi1: 0.01, phi2: 1.0 }] {
+                let mut inst = random_instance(20 + (seed as usize * 7) % 80, 0.3 + 0.04 * seed as f64, 31_000.0, seed);
+                inst.objective = objective;
+                if let Ok(p) = Problem::from_instance(&inst) {
+                    out.push(p);
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn moves_keep_routes_valid_feasible_and_their_figures_exact() {
+        let mut m = Moves::new();
+        let mut rng = PlannerRng::new(3);
+        let mut filled = 0;
+        for p in problems() {
+            let v = Value::of(&p);
+            m.set_objective(&p);
+            let Some(mut r) = Route::from_slice(&[p.start(), p.goal()]) else {
+                continue;
+            };
+            let Some(mut e) = p.evaluate(&r) else {
+                continue;
+            };
+            if !e.feasible {
+                continue;
+            }
+            for round in 0..20 {
+                let before = e;
+                filled += m.fill(&p, &mut r, &mut e, NodeSet::EMPTY, 0.3, &mut rng);
+                assert_eq!(p.evaluate(&r), Some(e));
+                assert!(e.feasible);
+                assert!(
+                    v.delta(
+                        e.time_s - before.time_s,
+                        e.weight - before.weight,
+                        e.risk_ratio_sum - before.risk_ratio_sum
+                    ) >= -1e-9
+                );
+                let t = e.time_s;
+                m.shorten(&p, &mut r, &mut e, 1000, 3);
+                assert_eq!(p.evaluate(&r), Some(e));
+                assert!(e.time_s <= t + 1e-6 && e.feasible);
+                let shape = [Ruin::Segment, Ruin::Random, Ruin::Cluster][round % 3];
+                let gone = m.ruin(&p, &mut r, &mut e, shape, 1 + round % 5, &mut rng);
+                assert_eq!(p.evaluate(&r), Some(e));
+                assert!(gone.iter().all(|u| !r.iter().any(|x| x == u)));
+            }
+        }
+        assert!(filled > 100, "{filled}");
+    }
+
+    #[test]
+    fn shorten_leaves_no_improving_two_opt() {
+        let mut m = Moves::new();
+        let mut rng = PlannerRng::new(4);
+        for p in problems() {
+            let v = Value::of(&p);
+            m.set_objective(&p);
+            let Some(mut r) = Route::from_slice(&[p.start(), p.goal()]) else {
+                continue;
+            };
+            let Some(mut e) = p.evaluate(&r) else {
+                continue;
+            };
+            if !e.feasible {
+                continue;
+            }
+            m.fill(&p, &mut r, &mut e, NodeSet::EMPTY, 0.5, &mut rng);
+            m.shorten(&p, &mut r, &mut e, 100_000, 3);
+            let ids = r.to_vec();
+            for i in 1..ids.len().saturating_sub(2) {
+                for j in i + 1..ids.len() - 1 {
+                    let mut c = ids.clone();
+                    c[i..=j].reverse();
+                    let Some(ce) = Route::from_slice(&c).and_then(|cr| p.evaluate(&cr)) else {
+                        continue;
+                    };
+                    let sd = v.static_delta(ce.weight - e.weight, ce.risk_ratio_sum - e.risk_ratio_sum);
+                    let dt = ce.time_s - e.time_s;
+                    assert!(
+                        !((sd > 1e-6 && dt <= 0.0) || (sd >= 0.0 && dt < -1e-6)),
+                        "{c:?} beats {ids:?}"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,96 @@
+//! Quality regression of the default planner `auto`, one test per
+//! objective, on fixed instances with known optima. Solves run a fixed number
+//! of steps (never a deadline: the machine is shared), so each result is a
+//! function of the seed and the bounds hold with a margin over what the
+//! planner reaches today (noted at each bound).
+
+use crate::fixtures::random_instance;
+use crate::instance::{Instance, Objective};
+use crate::oplib::BestKnown;
+use crate::problem::Problem;
+use crate::rng::PlannerRng;
+use crate::route::RouteStats;
+use crate::solver::auto::Auto;
+use crate::solver::exact::{ExactSettings, solve_exact};
+use crate::solver::{Budget, Solver, run};
+use crate::tsplib::parse_oplib;
+
+const OPLIB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/oplib");
+
+/// Steps of every solve: about 5-20 ms of `auto` on these sizes.
+const STEPS: u32 = 40;
+
+/// Solves `inst` with `auto` (seed 1, [`STEPS`] steps); returns the route's
+/// recomputed figures.
+fn solve(inst: &Instance) -> RouteStats {
+    let p = Problem::from_instance(inst).expect("a plannable instance");
+    let mut s = Auto::default();
+    run(&mut s, &p, &mut PlannerRng::new(1), None, Budget::iterations(STEPS));
+    let (r, _) = s.best();
+    RouteStats::from_instance(inst, &r.to_vec()).expect("a route of the instance")
+}
+
+#[test]
+fn max_weight_on_oplib_files_stays_near_the_published_optima() {
+    let known = BestKnown::parse(&std::fs::read_to_string(format!("{OPLIB}/best_known.csv")).unwrap()).unwrap();
+    let mut gaps = Vec::new();
+    for (name, entry) in known.iter() {
+        let path = format!("{OPLIB}/{}/{name}.oplib", entry.set);
+        let op = parse_oplib(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let stats = solve(&op.to_instance(name));
+        assert!(stats.feasible, "{name}");
+        // A score above a proved optimum would mean a wrong encoding.
+        assert!(
+            stats.weight <= entry.score + 1e-9,
+            "{name}: {} > {}",
+            stats.weight,
+            entry.score
+        );
+        let gap = 100.0 * (entry.score - stats.weight) / entry.score;
+        eprintln!("{name}: {} of {} (gap {gap:.2} %)", stats.weight, entry.score);
+        gaps.push(gap);
+    }
+    assert_eq!(gaps.len(), 6);
+    let mean = gaps.iter().sum::<f64>() / gaps.len() as f64;
+    let worst = gaps.iter().copied().fold(0.0, f64::max);
+    // Today: mean 2.37 %, worst 9.54 % (gr96-gen2); the old weight-only
+    // `auto` reached the same 6 at 2-3 times these steps' cost.
+    assert!(mean <= MEAN_BOUND_MW, "mean gap {mean:.2} %");
+    assert!(worst <= WORST_BOUND_MW, "worst gap {worst:.2} %");
+}
+
+#[test]
+fn paper_cost_stays_near_the_proved_optimum() {
+    let mut gaps = Vec::new();
+    for seed in 0..6 {
+        let mut inst = random_instance(14, 0.6, 9_000.0, seed);
+        inst.objective = Objective::PaperCost { phi1: 0.01, phi2: 1.0 };
+        let p = Problem::from_instance(&inst).unwrap();
+        let exact = solve_exact(&p, &ExactSettings::default()).unwrap();
+        assert!(exact.proved_optimal, "seed {seed}");
+        let optimum = exact.eval.cost(inst.objective, inst.time_available_s);
+        let stats = solve(&inst);
+        assert!(stats.feasible, "seed {seed}");
+        assert!(
+            stats.cost >= optimum - 1e-9,
+            "seed {seed}: {} beats the optimum {optimum}",
+            stats.cost
+        );
+        let gap = 100.0 * (stats.cost - optimum) / optimum;
+        eprintln!("seed {seed}: cost {} against {optimum} (gap {gap:.2} %)", stats.cost);
+        gaps.push(gap);
+    }
+    let mean = gaps.iter().sum::<f64>() / gaps.len() as f64;
+    let worst = gaps.iter().copied().fold(0.0, f64::max);
+    // Today: 4 of 6 at the optimum, mean 14.9 %, worst 82.4 % (seed 4: a
+    // two-edge route where the optimum takes three). Weak, but a planner
+    // that optimised weight instead of this cost fails it.
+    assert!(mean <= MEAN_BOUND_PC, "mean gap {mean:.2} %");
+    assert!(worst <= WORST_BOUND_PC, "worst gap {worst:.2} %");
+}
+
+/// Bounds with a margin over today's figures (see each test).
+const MEAN_BOUND_MW: f64 = 3.5;
+const WORST_BOUND_MW: f64 = 12.0;
+const MEAN_BOUND_PC: f64 = 20.0;
+const WORST_BOUND_PC: f64 = 90.0;
