@@ -4,6 +4,7 @@ pub mod bench;
 pub mod cli;
 pub mod external;
 pub mod log;
+pub mod mcap_log;
 pub mod report;
 pub mod run;
 pub mod soak;

@@ -1,6 +1,6 @@
 //! `planner mission`: starts sensor-sim and vehicle-sim as child processes,
 //! runs the re-planning service on a thread of its own, shows progress, and
-//! writes `report.json`, `mission.log`, `mission.svg` and a summary.
+//! writes `report.json`, `mission.log`, `mission.svg`, `mission.mcap` and a summary.
 //!
 //! Threads: the service thread owns every iceoryx2 port of this process and
 //! is the only one the allocator counts; it hands its events to the main
@@ -1121,8 +1121,35 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         a.scenario.seed,
         auv_messages::msg::outcome_name(outcome)
     );
+    // Before the plot: the plot redraws the world to its last epoch, the
+    // MCAP file starts from the world as generated.
+    write_mcap(&out, &world, &journal, a, report.latency_us)?;
     plot(&out.join("mission.svg"), &mut world, &trace, &title)?;
     Ok((report, out))
+}
+
+/// Writes `out/mission.mcap` from `out/mission.log`, the journal and the
+/// world; a lockstep run leaves the wall-clock latency out so the file is
+/// reproducible.
+fn write_mcap(
+    out: &Path,
+    world: &MissionWorld,
+    journal: &JournalSummary,
+    a: &MissionArgs,
+    latency_us: (u64, u64, u64),
+) -> Result<(), MissionError> {
+    let log_path = out.join("mission.log");
+    let log = std::fs::read_to_string(&log_path).map_err(|e| io_err(&log_path, e))?;
+    let path = out.join("mission.mcap");
+    let record = super::mcap_log::MissionRecord {
+        world,
+        log: &log,
+        journal,
+        vehicle: &a.vehicle,
+        latency_us: (!a.lockstep).then_some(latency_us),
+        geo: None,
+    };
+    super::mcap_log::write(&path, &record).map_err(|e| io_err(&path, e))
 }
 
 /// Runs `planner mission`: 0 when the mission ran to its end (goal or time
@@ -1132,7 +1159,10 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
         Ok((report, out)) => {
             if !a.quiet {
                 println!("{}", report.summary());
-                println!("wrote {}/report.json, mission.log, mission.svg", out.display());
+                println!(
+                    "wrote {}/report.json, mission.log, mission.svg, mission.mcap",
+                    out.display()
+                );
             }
             if report.outcome == Outcome::Aborted {
                 ExitCode::from(130)
