@@ -43,6 +43,8 @@ enum Command {
     Quality(cli::quality::Args),
     /// Print the layout of every message on the wire (JSON: sizes, offsets, enum codes, topics, QoS).
     WireLayout(cli::wire_layout::Args),
+    /// Summarise a mission.mcap: channels, message counts, time span, plans, final pose, outcome.
+    Replay(cli::replay::Args),
     /// The three-process system: `mission`, `serve`, `bench-latency`.
     #[command(flatten)]
     Ipc(planner::mission::cli::IpcCommand),
@@ -61,6 +63,7 @@ fn main() -> ExitCode {
         Command::Montecarlo(args) => cli::montecarlo::run(args),
         Command::Quality(args) => cli::quality::run(args),
         Command::WireLayout(args) => cli::wire_layout::run(args),
+        Command::Replay(args) => cli::replay::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

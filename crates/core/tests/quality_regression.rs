@@ -4,16 +4,16 @@
 //! function of the seed and the bounds hold with a margin over what the
 //! planner reaches today (noted at each bound).
 
-use crate::fixtures::random_instance;
-use crate::instance::{Instance, Objective};
-use crate::oplib::BestKnown;
-use crate::problem::Problem;
-use crate::rng::PlannerRng;
-use crate::route::RouteStats;
-use crate::solver::auto::Auto;
-use crate::solver::exact::{ExactSettings, solve_exact};
-use crate::solver::{Budget, Solver, run};
-use crate::tsplib::parse_oplib;
+use auv_core::fixtures::random_instance;
+use auv_core::instance::{Instance, Objective};
+use auv_core::oplib::BestKnown;
+use auv_core::problem::Problem;
+use auv_core::rng::PlannerRng;
+use auv_core::route::RouteStats;
+use auv_core::solver::auto::Auto;
+use auv_core::solver::exact::{ExactSettings, solve_exact};
+use auv_core::solver::{Budget, Solver, run};
+use auv_core::tsplib::parse_oplib;
 
 const OPLIB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/oplib");
 

@@ -12,6 +12,7 @@ pub mod convert_op;
 pub mod export;
 pub mod montecarlo;
 pub mod quality;
+pub mod replay;
 pub mod solve;
 pub mod wire_layout;
 
@@ -21,8 +22,8 @@ use std::path::{Path, PathBuf};
 use auv_core::instance::{Instance, InstanceError};
 use auv_core::oplib::OpError;
 use auv_core::problem::ProblemError;
-use auv_world::scenario::{ConfigError, LoadError};
 use auv_core::tsplib::TsplibError;
+use auv_world::scenario::{ConfigError, LoadError};
 
 /// Seed used when `--seed` is not given (our choice; any fixed value would
 /// do). The output always reports the seed it used.
@@ -114,6 +115,14 @@ pub enum CliError {
     /// Arguments that parse but do not fit together.
     #[error("{0}")]
     Usage(String),
+    /// A file that is not a readable mission MCAP log.
+    #[error("{}: {source}", path.display())]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        source: planner::mission::mcap_log::McapLogError,
+    },
     /// The planner broke its own contract (a defect, not bad input).
     #[error("internal error (please report): {0}")]
     Internal(String),

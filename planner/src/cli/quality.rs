@@ -29,16 +29,16 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use clap::ValueEnum;
 use auv_core::instance::{Instance, Objective};
-use auv_platform::clock::thread_cpu_time_s;
 use auv_core::oplib::{BestKnown, instance_name};
-use planner::plot_quality::{GapCurve, gap_curves};
 use auv_core::problem::Problem;
 use auv_core::rng::PlannerRng;
 use auv_core::route::{Route, RouteEval};
 use auv_core::solver::exact::{ExactSettings, solve_exact};
 use auv_core::solver::{Algorithm, Solver};
+use auv_platform::clock::thread_cpu_time_s;
+use clap::ValueEnum;
+use planner::plot_quality::{GapCurve, gap_curves};
 
 use super::{CliError, DEFAULT_SEED, load_instance, print, read_text, write_text};
 

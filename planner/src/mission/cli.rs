@@ -13,7 +13,7 @@ use crate::serve::{ServeArgs, run_serve};
 #[derive(Clone, Debug, clap::Subcommand)]
 pub enum IpcCommand {
     /// Run a whole mission: sensor-sim and vehicle-sim as child processes,
-    /// the re-planning service here; writes report.json, mission.log, mission.svg.
+    /// the re-planning service here; writes report.json, mission.log, mission.svg, mission.mcap.
     Mission(MissionArgs),
     /// Run N missions back to back (with random faults) and report on
     /// survival, leaks and memory: DIR/soak.json.

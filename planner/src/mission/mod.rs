@@ -6,6 +6,7 @@ pub mod cli;
 pub mod external;
 pub mod external_kills;
 pub mod log;
+pub mod mcap_log;
 pub mod picture;
 pub mod report;
 pub mod restart;

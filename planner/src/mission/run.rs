@@ -1,7 +1,7 @@
 //! `planner mission`: the planner service (`planner serve`), sensor-sim and
 //! vehicle-sim as supervised child processes ([`super::supervisor`]), in
 //! scaled time or lockstep alike; shows progress and writes `report.json`,
-//! `mission.log` (written by the planner process), `mission.svg`,
+//! `mission.log` (written by the planner process), `mission.svg`, `mission.png`, `route.geojson`, `mission.mcap`,
 //! `journal.jsonl` (the vehicle's), `faults.log`, `pids.json` and a summary.
 //!
 //! Shutdown: Ctrl-C reaches all three processes (one process group); each
@@ -528,6 +528,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let visits = journal_visits(&journal, &world);
     let collection = super::route_geojson::route_geojson(&world, &visits);
     std::fs::write(&geojson_path, collection.to_string() + "\n").map_err(|e| io_err(&geojson_path, e))?;
+    write_mcap(&out, &world, &journal, a, report.latency_us)?;
     plot(&out.join("mission"), &mut world, &trace, &visits, &report)?;
     Ok((report, out))
 }
@@ -559,6 +560,29 @@ fn journal_visits(journal: &JournalSummary, world: &MissionWorld) -> Vec<super::
     visits
 }
 
+/// Writes `mission.mcap` (see [`super::mcap_log`]) from what the run
+/// recorded: the log, the journal and the world.
+fn write_mcap(
+    out: &Path,
+    world: &MissionWorld,
+    journal: &JournalSummary,
+    a: &MissionArgs,
+    latency_us: (u64, u64, u64),
+) -> Result<(), MissionError> {
+    let log_path = out.join("mission.log");
+    let log = std::fs::read_to_string(&log_path).map_err(|e| io_err(&log_path, e))?;
+    let path = out.join("mission.mcap");
+    let record = super::mcap_log::MissionRecord {
+        world,
+        log: &log,
+        journal,
+        vehicle: &a.vehicle,
+        latency_us: (!a.lockstep).then_some(latency_us),
+        geo: None,
+    };
+    super::mcap_log::write(&path, &record).map_err(|e| io_err(&path, e))
+}
+
 fn signal_name(sig: i32) -> String {
     match sig {
         libc::SIGINT => "SIGINT".into(),
@@ -583,7 +607,7 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
             if !a.quiet {
                 println!("{}", report.summary());
                 println!(
-                    "wrote {}/report.json, mission.log, mission.svg, mission.png, route.geojson",
+                    "wrote {}/report.json, mission.log, mission.svg, mission.png, route.geojson, mission.mcap",
                     out.display()
                 );
             }
