@@ -173,6 +173,12 @@ class PlannerStatus(ctypes.Structure):
         ("alloc", AllocCounters),
         ("rejected", c_uint64 * REJECT_KINDS),
         ("iterations_total", c_uint64),
+        ("latency_p50_ns", c_uint64),
+        ("latency_p99_ns", c_uint64),
+        ("cut_iterations", c_uint64),
+        ("cut_with_warm_start", c_uint64),
+        ("cut_weight", c_double),
+        ("cut_warm_start_weight", c_double),
         ("phase", c_uint32),
         ("last_iterations", c_uint32),
         ("rt_priority", c_uint32),
@@ -181,7 +187,7 @@ class PlannerStatus(ctypes.Structure):
 
     @staticmethod
     def type_name():
-        return "auv.PlannerStatus.v3"
+        return "auv.PlannerStatus.v4"
 
 
 #: Nested structs, as ``planner wire-layout`` lists them under "structs".

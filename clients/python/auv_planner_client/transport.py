@@ -48,7 +48,7 @@ WAYPOINTS = Topic(m.WaypointSnapshot, "sensor/waypoints/v1", 1, ("planner", "veh
 VEHICLE_STATE = Topic(m.VehicleState, "vehicle/state/v2", 2, ("planner", "sensor"), 1, 2)
 # Plans queue deep: an observer counting them must not lose one in a burst.
 PLAN = Topic(m.Plan, "planner/plan/v2", 3, ("vehicle",), 0, 64)
-STATUS = Topic(m.PlannerStatus, "planner/status/v3", 4, ("vehicle",), 1, 2)
+STATUS = Topic(m.PlannerStatus, "planner/status/v4", 4, ("vehicle",), 1, 2)
 TOPICS = [WAYPOINTS, VEHICLE_STATE, PLAN, STATUS]
 
 MAX_PREFIX_LEN = 32

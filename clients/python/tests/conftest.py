@@ -96,10 +96,6 @@ def sweep(pfx):
 
 def python_mission(tmp_path, seed, name, *vehicle_args):
     """A lockstep mission with examples/vehicle.py as its vehicle; returns (out dir, vehicle stderr, mission stderr)."""
-    # Known gap: under the supervisor, a lockstep mission with an outside
-    # vehicle stops after its first plan (the vehicle waits for an answer the
-    # supervised planner does not send). Skipped, visibly, until fixed.
-    pytest.skip("lockstep with --external-vehicle hangs after the first plan under the supervisor")
     out = str(tmp_path / name)
     pfx = prefix("v")
     mission = start_planner(

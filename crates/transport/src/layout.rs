@@ -264,6 +264,12 @@ pub fn messages() -> Vec<StructLayout> {
                 alloc,
                 rejected,
                 iterations_total,
+                latency_p50_ns,
+                latency_p99_ns,
+                cut_iterations,
+                cut_with_warm_start,
+                cut_weight,
+                cut_warm_start_weight,
                 phase,
                 last_iterations,
                 rt_priority,
@@ -445,7 +451,7 @@ mod tests {
                 "auv.WaypointSnapshot.v1",
                 "auv.VehicleState.v2",
                 "auv.Plan.v2",
-                "auv.PlannerStatus.v3"
+                "auv.PlannerStatus.v4"
             ]
         );
         assert!(structs().iter().all(|s| s.type_name.is_none()));
