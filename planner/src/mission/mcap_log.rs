@@ -278,23 +278,36 @@ fn schema(title: &str, props: &[(&str, &str)]) -> Vec<u8> {
 
 /// The channels of a mission file, in the order they are declared.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-enum Topic {
+pub enum Topic {
+    /// `chart`: the water mask (`foxglove.Grid`).
     Chart,
+    /// `waypoints/bounds`: the drift bounds (`foxglove.SceneUpdate`).
     Bounds,
+    /// `waypoints`: the waypoints as reported (`foxglove.SceneUpdate`).
     Waypoints,
+    /// `planner/plan`: each plan (`foxglove.SceneUpdate`).
     Plan,
+    /// `vehicle/pose`: the vehicle (`foxglove.PoseInFrame`).
     Pose,
+    /// `vehicle/track`: the route travelled (`foxglove.SceneUpdate`).
     Track,
+    /// `events`: log lines (`foxglove.Log`).
     Events,
+    /// `planner/status`: each plan's figures ([`STATUS_SCHEMA`]).
     Status,
+    /// `mission/progress`: each arrival ([`PROGRESS_SCHEMA`]).
     Progress,
+    /// `planner/latency`: the latency summary ([`LATENCY_SCHEMA`]).
     Latency,
+    /// `vehicle/fix`: lat/lon of the vehicle (`foxglove.LocationFix`).
     Fix,
+    /// `vehicle/route_geojson`: the route travelled (`foxglove.GeoJSON`).
     Route,
 }
 
 impl Topic {
-    fn name(self) -> &'static str {
+    /// The channel name below `/<vehicle>/`.
+    pub fn name(self) -> &'static str {
         match self {
             Topic::Chart => "chart",
             Topic::Bounds => "waypoints/bounds",
@@ -462,6 +475,149 @@ fn pose_json(p: Vec3, yaw: f64) -> Value {
     json!({"position": point(p), "orientation": {"x": 0.0, "y": 0.0, "z": s, "w": c}})
 }
 
+/// A [`Topic::Pose`] message: the vehicle at `p` heading `yaw` (rad from east).
+pub fn pose_message(t_ns: u64, p: Vec3, yaw: f64) -> Value {
+    json!({"timestamp": stamp(t_ns), "frame_id": FRAME, "pose": pose_json(p, yaw)})
+}
+
+/// A [`Topic::Plan`] message: the plan `replan` through `pts` (the first
+/// plan of a mission blue, later ones purple).
+pub fn plan_message(t_ns: u64, replan: u64, route: &[usize], pts: &[Vec3], first: bool) -> Value {
+    let ids = route.iter().map(usize::to_string).collect::<Vec<_>>().join(" ");
+    let meta = [("replan", replan.to_string()), ("route", ids)];
+    let c = if first {
+        colour(0.2, 0.3, 0.9, 1.0)
+    } else {
+        colour(0.6, 0.1, 0.7, 1.0)
+    };
+    let plan = entity(t_ns, "plan", &meta, |e| {
+        e.insert("lines".into(), json!([line_json(pts, c)]));
+    });
+    scene(vec![plan])
+}
+
+/// The figures of one plan on [`Topic::Status`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanFigures {
+    /// Mission time of its trigger, s.
+    pub t: f64,
+    /// Re-plan counter.
+    pub replan: u64,
+    /// Trigger name.
+    pub trigger: String,
+    /// Budget planned for, s.
+    pub budget_s: f64,
+    /// Waypoints in the route.
+    pub route_len: usize,
+    /// Predicted time, s.
+    pub time_s: f64,
+    /// Predicted weight.
+    pub weight: f64,
+    /// Predicted distance, m.
+    pub distance_m: f64,
+    /// Fits the budget.
+    pub feasible: bool,
+    /// Solver iterations.
+    pub iterations: u64,
+    /// Cut by the deadline.
+    pub deadline_cut: bool,
+    /// Snapshot epoch.
+    pub epoch: u64,
+}
+
+impl PlanFigures {
+    /// The [`Topic::Status`] message.
+    pub fn message(&self) -> Value {
+        json!({
+            "t": self.t, "replan": self.replan, "trigger": self.trigger, "budget_s": self.budget_s,
+            "route_len": self.route_len, "time_s": self.time_s,
+            "weight": self.weight, "distance_m": self.distance_m,
+            "feasible": self.feasible, "iterations": self.iterations,
+            "deadline_cut": self.deadline_cut, "epoch": self.epoch,
+        })
+    }
+}
+
+/// A [`Topic::Progress`] message: an arrival.
+pub fn progress_message(t: f64, node: u64, tasks: u64, weight: f64, time_left_s: f64) -> Value {
+    json!({"t": t, "node": node, "tasks": tasks, "weight": weight, "time_left_s": time_left_s})
+}
+
+/// A [`Topic::Events`] message: line `line` of `file` from `name`
+/// (`foxglove.Log` levels: 2 info, 3 warning, 4 error).
+pub fn log_message(t_ns: u64, level: u8, text: &str, name: &str, file: &str, line: usize) -> Value {
+    json!({
+        "timestamp": stamp(t_ns), "level": level, "message": text,
+        "name": name, "file": file, "line": line,
+    })
+}
+
+/// Mission time, s, as MCAP log time, ns.
+pub fn log_time_ns(t: f64) -> u64 {
+    ns(t)
+}
+
+/// Writes JSON messages to MCAP channels `/<vehicle>/<topic>`, each channel
+/// declared with its schema before its first message.
+pub struct ChannelWriter<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    vehicle: String,
+    ids: BTreeMap<Topic, u16>,
+    sequence: BTreeMap<Topic, u32>,
+}
+
+impl<W: Write + Seek> ChannelWriter<W> {
+    /// A writer on `w` with `topics` declared now, in that order (the rest
+    /// when first written).
+    pub fn new(w: W, vehicle: &str, topics: &[Topic]) -> Result<Self, McapLogError> {
+        let writer = mcap::WriteOptions::new().compression(None).profile("").create(w)?;
+        let mut cw = Self {
+            writer,
+            vehicle: vehicle.to_string(),
+            ids: BTreeMap::new(),
+            sequence: BTreeMap::new(),
+        };
+        for &t in topics {
+            cw.channel(t)?;
+        }
+        Ok(cw)
+    }
+
+    fn channel(&mut self, topic: Topic) -> Result<u16, McapLogError> {
+        if let Some(&id) = self.ids.get(&topic) {
+            return Ok(id);
+        }
+        let schema_id = self
+            .writer
+            .add_schema(&topic.schema_name(), "jsonschema", &topic.schema())?;
+        let name = format!("/{}/{}", self.vehicle, topic.name());
+        let id = self.writer.add_channel(schema_id, &name, "json", &BTreeMap::new())?;
+        self.ids.insert(topic, id);
+        Ok(id)
+    }
+
+    /// Writes `data` on `topic` at log time `t_ns`.
+    pub fn write(&mut self, topic: Topic, t_ns: u64, data: &Value) -> Result<(), McapLogError> {
+        let channel_id = self.channel(topic)?;
+        let seq = self.sequence.entry(topic).or_insert(0);
+        *seq += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id,
+            sequence: *seq,
+            log_time: t_ns,
+            publish_time: t_ns,
+        };
+        self.writer.write_to_known_channel(&header, data.to_string().as_bytes())?;
+        Ok(())
+    }
+
+    /// Writes the summary and returns the sink.
+    pub fn finish(mut self) -> Result<W, McapLogError> {
+        self.writer.finish()?;
+        Ok(self.writer.into_inner())
+    }
+}
+
 /// A message waiting to be written, in log-time order.
 struct Pending {
     t_ns: u64,
@@ -534,10 +690,7 @@ fn messages(rec: &MissionRecord) -> Result<Vec<Pending>, McapLogError> {
         out.push(Pending {
             t_ns,
             topic: Topic::Events,
-            data: json!({
-                "timestamp": stamp(t_ns), "level": level(&v), "message": text,
-                "name": "planner", "file": "mission.log", "line": line,
-            }),
+            data: log_message(t_ns, level(&v), text, "planner", "mission.log", line),
         });
         match field(&v, "event", line)?.as_str() {
             Some("sensor_update") => {
@@ -570,45 +723,46 @@ fn messages(rec: &MissionRecord) -> Result<Vec<Pending>, McapLogError> {
                     });
                 }
                 let replan = num(&v, "replan", line)? as u64;
-                let ids = route.iter().map(usize::to_string).collect::<Vec<_>>().join(" ");
-                let meta = [("replan", replan.to_string()), ("route", ids)];
                 let pts: Vec<Vec3> = route.iter().map(|&n| pos[n]).collect();
-                let colour_of_plan = if plans == 0 {
-                    colour(0.2, 0.3, 0.9, 1.0)
-                } else {
-                    colour(0.6, 0.1, 0.7, 1.0)
-                };
-                let plan = entity(t_ns, "plan", &meta, |e| {
-                    e.insert("lines".into(), json!([line_json(&pts, colour_of_plan)]));
-                });
                 out.push(Pending {
                     t_ns,
                     topic: Topic::Plan,
-                    data: scene(vec![plan]),
+                    data: plan_message(t_ns, replan, &route, &pts, plans == 0),
                 });
                 let (trigger, budget_s) = pending_trigger.take().unwrap_or_default();
+                let figures = PlanFigures {
+                    t,
+                    replan,
+                    trigger,
+                    budget_s,
+                    route_len: route.len(),
+                    time_s: num(&v, "time_s", line)?,
+                    weight: num(&v, "weight", line)?,
+                    distance_m: num(&v, "distance_m", line)?,
+                    feasible: v["feasible"] == true,
+                    iterations: num(&v, "iterations", line)? as u64,
+                    deadline_cut: v["deadline_cut"] == true,
+                    epoch,
+                };
                 out.push(Pending {
                     t_ns,
                     topic: Topic::Status,
-                    data: json!({
-                        "t": t, "replan": replan, "trigger": trigger, "budget_s": budget_s,
-                        "route_len": route.len(), "time_s": num(&v, "time_s", line)?,
-                        "weight": num(&v, "weight", line)?, "distance_m": num(&v, "distance_m", line)?,
-                        "feasible": v["feasible"] == true, "iterations": num(&v, "iterations", line)? as u64,
-                        "deadline_cut": v["deadline_cut"] == true, "epoch": epoch,
-                    }),
+                    data: figures.message(),
                 });
                 plans += 1;
             }
             Some("arrival") => out.push(Pending {
                 t_ns,
                 topic: Topic::Progress,
-                data: json!({
-                    "t": t, "node": num(&v, "node", line)? as u64, "tasks": num(&v, "tasks", line)? as u64,
-                    "weight": num(&v, "weight", line)?, "time_left_s": num(&v, "time_left_s", line)?,
-                }),
+                data: progress_message(
+                    t,
+                    num(&v, "node", line)? as u64,
+                    num(&v, "tasks", line)? as u64,
+                    num(&v, "weight", line)?,
+                    num(&v, "time_left_s", line)?,
+                ),
             }),
-            Some("finished") => {}
+            Some("finished" | "command") => {}
             other => {
                 return Err(McapLogError::BadLogLine {
                     line,
@@ -623,7 +777,7 @@ fn messages(rec: &MissionRecord) -> Result<Vec<Pending>, McapLogError> {
         out.push(Pending {
             t_ns,
             topic: Topic::Pose,
-            data: json!({"timestamp": stamp(t_ns), "frame_id": FRAME, "pose": pose_json(p.p, p.yaw)}),
+            data: pose_message(t_ns, p.p, p.yaw),
         });
         let so_far: Vec<Vec3> = track[..=k].iter().map(|q| q.p).collect();
         let travelled = entity(t_ns, "travelled", &[], |e| {
@@ -681,31 +835,14 @@ fn line_json(pts: &[Vec3], c: Value) -> Value {
 /// Writes the mission's MCAP file to `w`.
 pub fn write_to<W: Write + Seek>(rec: &MissionRecord, w: W) -> Result<W, McapLogError> {
     let msgs = messages(rec)?;
-    let mut writer = mcap::WriteOptions::new().compression(None).profile("").create(w)?;
     let mut topics: Vec<Topic> = msgs.iter().map(|m| m.topic).collect();
     topics.sort();
     topics.dedup();
-    let mut ids = BTreeMap::new();
-    for topic in topics {
-        let schema_id = writer.add_schema(&topic.schema_name(), "jsonschema", &topic.schema())?;
-        let name = format!("/{}/{}", rec.vehicle, topic.name());
-        let channel = writer.add_channel(schema_id, &name, "json", &BTreeMap::new())?;
-        ids.insert(topic, channel);
-    }
-    let mut sequence: BTreeMap<Topic, u32> = BTreeMap::new();
+    let mut writer = ChannelWriter::new(w, rec.vehicle, &topics)?;
     for m in &msgs {
-        let seq = sequence.entry(m.topic).or_insert(0);
-        *seq += 1;
-        let header = mcap::records::MessageHeader {
-            channel_id: ids[&m.topic],
-            sequence: *seq,
-            log_time: m.t_ns,
-            publish_time: m.t_ns,
-        };
-        writer.write_to_known_channel(&header, m.data.to_string().as_bytes())?;
+        writer.write(m.topic, m.t_ns, &m.data)?;
     }
-    writer.finish()?;
-    Ok(writer.into_inner())
+    writer.finish()
 }
 
 /// Writes `mission.mcap` at `path`.
