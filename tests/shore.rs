@@ -29,7 +29,16 @@ fn endpoint() -> String {
 
 fn start_mission(out: &Path, p: &str, ep: &str, scale: &str, extra: &[&str]) -> Child {
     Command::new(binary("planner"))
-        .args(["mission", "--quiet", "--nodes", "12", "--seed", "2", "--time-scale", scale])
+        .args([
+            "mission",
+            "--quiet",
+            "--nodes",
+            "12",
+            "--seed",
+            "2",
+            "--time-scale",
+            scale,
+        ])
         .args(["--ipc-prefix", p, "--shore", ep])
         .args(extra)
         .arg("--out")
@@ -71,7 +80,10 @@ fn wait_for_line(dir: &Path, file: &str, needle: &str) -> String {
         if let Some(l) = t.lines().find(|l| l.contains(needle)) {
             return l.to_string();
         }
-        assert!(t0.elapsed() < LIMIT, "no line with {needle} in {file} within {LIMIT:?}:\n{t}");
+        assert!(
+            t0.elapsed() < LIMIT,
+            "no line with {needle} in {file} within {LIMIT:?}:\n{t}"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
 }
@@ -129,7 +141,11 @@ fn the_shore_sees_every_plan_published_onboard_and_the_end_of_the_mission() {
     assert_eq!(s["plan_seq_gaps"], 0, "{s:#}");
     assert!(s["plans_live"].as_u64().unwrap() >= 1, "{s:#}");
     assert_eq!(s["final_state"]["route"], r["route"], "{s:#}");
-    assert!(r["shore_link"]["connected"].as_u64().unwrap() >= 1, "{:#}", r["shore_link"]);
+    assert!(
+        r["shore_link"]["connected"].as_u64().unwrap() >= 1,
+        "{:#}",
+        r["shore_link"]
+    );
     // The recording opens as an MCAP file with the mission's plan and pose channels.
     let o = auv_system::run(
         &binary("planner"),
@@ -137,7 +153,10 @@ fn the_shore_sees_every_plan_published_onboard_and_the_end_of_the_mission() {
         LIMIT,
     );
     let listing = text(&o.stdout) + &text(&o.stderr);
-    assert!(listing.contains("/auv1/planner/plan") && listing.contains("/auv1/vehicle/pose"), "{listing}");
+    assert!(
+        listing.contains("/auv1/planner/plan") && listing.contains("/auv1/vehicle/pose"),
+        "{listing}"
+    );
 }
 
 /// A waypoint neither visited nor in the plan being followed, from the mission's log.
@@ -149,7 +168,14 @@ fn untouched_waypoint(out: &Path) -> u64 {
         let v: serde_json::Value = serde_json::from_str(l).unwrap();
         match v["event"].as_str() {
             Some("arrival") => visited.push(v["node"].as_u64().unwrap()),
-            Some("plan") => route = v["route"].as_array().unwrap().iter().filter_map(|n| n.as_u64()).collect(),
+            Some("plan") => {
+                route = v["route"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter_map(|n| n.as_u64())
+                    .collect()
+            }
             _ => {}
         }
     }
@@ -168,10 +194,18 @@ fn each_command_kind_is_validated_applied_once_and_acknowledged_with_its_plan() 
     // Refused by the planner: a budget beyond the vehicle's own.
     let o = shore_command(&ep, &["--command", "set-time-budget", "--budget-s", "1e9"]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
-    assert!(text(&o.stderr).contains("refused: budget_out_of_range"), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("refused: budget_out_of_range"),
+        "{}",
+        text(&o.stderr)
+    );
     // Refused by the link: no such waypoint.
     let o = shore_command(&ep, &["--command", "remove-task", "--waypoint", "nowhere"]);
-    assert!(text(&o.stderr).contains("refused: unknown_waypoint"), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("refused: unknown_waypoint"),
+        "{}",
+        text(&o.stderr)
+    );
     // Applied, and a plan made for it.
     let w = untouched_waypoint(&out).to_string();
     let args = ["--command", "remove-task", "--waypoint", &w, "--command-id", "4242"];
@@ -183,7 +217,11 @@ fn each_command_kind_is_validated_applied_once_and_acknowledged_with_its_plan() 
     let o = shore_command(&ep, &args);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let again = text(&o.stdout);
-    let seq = |s: &str| s.split("plan seq ").nth(1).map(|r| r.split(' ').next().unwrap_or("").to_string());
+    let seq = |s: &str| {
+        s.split("plan seq ")
+            .nth(1)
+            .map(|r| r.split(' ').next().unwrap_or("").to_string())
+    };
     assert_eq!(seq(&again), seq(&first), "{first} / {again}");
     for cmd in [
         &["--command", "add-task", "--waypoint", &w][..],
@@ -270,20 +308,50 @@ fn peers_without_credentials_can_neither_read_nor_command_and_a_viewer_cannot_co
     let mission = start_mission(&out, &p, &ep, "600", &["--zenoh-config", onboard.to_str().unwrap()]);
     let watcher = start_shore(&ep, Some(&watch_out), &[&op[..], &["--give-up-s", "60"]].concat());
     wait_for_line(&watch_out, "shore.log", "\"plan\"");
-    for (who, extra) in [("no credentials", vec![]), ("a wrong password", vec!["--zenoh-config", intruder.to_str().unwrap()])] {
-        let o = wait_with_watchdog(start_shore(&ep, None, &[&extra[..], &["--give-up-s", "4"]].concat()), LIMIT);
+    for (who, extra) in [
+        ("no credentials", vec![]),
+        ("a wrong password", vec!["--zenoh-config", intruder.to_str().unwrap()]),
+    ] {
+        let o = wait_with_watchdog(
+            start_shore(&ep, None, &[&extra[..], &["--give-up-s", "4"]].concat()),
+            LIMIT,
+        );
         assert_eq!(o.status.code(), Some(1), "{who}: {}", text(&o.stderr));
         assert!(text(&o.stderr).contains("no message"), "{who}: {}", text(&o.stderr));
-        let o = shore_command(&ep, &[&extra[..], &["--command", "abort-to-goal", "--give-up-s", "4"]].concat());
-        assert!(text(&o.stderr).contains("no acknowledgement"), "{who}: {}", text(&o.stderr));
-        assert!(text(&o.stderr).contains("(link waiting)"), "{who} heard the vehicle: {}", text(&o.stderr));
+        let o = shore_command(
+            &ep,
+            &[&extra[..], &["--command", "abort-to-goal", "--give-up-s", "4"]].concat(),
+        );
+        assert!(
+            text(&o.stderr).contains("no acknowledgement"),
+            "{who}: {}",
+            text(&o.stderr)
+        );
+        assert!(
+            text(&o.stderr).contains("(link waiting)"),
+            "{who} heard the vehicle: {}",
+            text(&o.stderr)
+        );
     }
     // The viewer hears the vehicle (its link is up) but its commands never arrive.
-    let o = shore_command(&ep, &["--zenoh-config", viewer.to_str().unwrap(), "--command", "abort-to-goal", "--give-up-s", "4"]);
+    let o = shore_command(
+        &ep,
+        &[
+            "--zenoh-config",
+            viewer.to_str().unwrap(),
+            "--command",
+            "abort-to-goal",
+            "--give-up-s",
+            "4",
+        ],
+    );
     assert!(text(&o.stderr).contains("no acknowledgement"), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("(link up)"), "{}", text(&o.stderr));
     // The operator's do.
-    let o = shore_command(&ep, &[&op[..], &["--command", "set-time-budget", "--budget-s", "30500"]].concat());
+    let o = shore_command(
+        &ep,
+        &[&op[..], &["--command", "set-time-budget", "--budget-s", "30500"]].concat(),
+    );
     assert!(o.status.success(), "{}", text(&o.stderr));
     finish(mission, "mission");
     finish(watcher, "operator's console");

@@ -229,7 +229,10 @@ pub fn run_bridge(
     let mut last_hb: Option<Instant> = None;
     let mut ended: Option<(Instant, String)> = None;
     let mut last_end_note = Instant::now();
-    log.line(t, json!({"event": "link_start", "endpoint": cfg.endpoint, "timeout_ms": cfg.link_timeout.as_millis() as u64}));
+    log.line(
+        t,
+        json!({"event": "link_start", "endpoint": cfg.endpoint, "timeout_ms": cfg.link_timeout.as_millis() as u64}),
+    );
     loop {
         if signal::shutdown_requested() {
             break;
@@ -340,7 +343,9 @@ pub fn run_bridge(
             for leaf in keys::LATEST {
                 let key = keys::key(v, leaf);
                 let Some(bytes) = latest.get(leaf) else { continue };
-                let Ok(k) = KeyExpr::try_from(key.as_str()) else { continue };
+                let Ok(k) = KeyExpr::try_from(key.as_str()) else {
+                    continue;
+                };
                 if q.key_expr().intersects(&k) {
                     let _ = q.reply(k, bytes.clone()).wait();
                 }
@@ -359,7 +364,10 @@ pub fn run_bridge(
             let _ = pub_heartbeat.put(encode::encode(&hb)).wait();
         }
         if let Some(LinkChange::Lost { silent }) = monitor.poll(Instant::now()) {
-            log.line(t, json!({"event": "link_lost", "silent_ms": silent.as_secs_f64() * 1000.0}));
+            log.line(
+                t,
+                json!({"event": "link_lost", "silent_ms": silent.as_secs_f64() * 1000.0}),
+            );
         }
         if let Some((since, outcome)) = &ended {
             if last_end_note.elapsed() >= Duration::from_millis(200) || !summary.mission_ended {
@@ -401,9 +409,18 @@ mod tests {
             resolve(&c(CommandKind::AddTask, None, Some("2")), &names),
             Ok((CommandKind::AddTask, 0.0, 2))
         );
-        assert_eq!(resolve(&c(CommandKind::AddTask, None, Some("nowhere")), &names), Err("unknown_waypoint"));
-        assert_eq!(resolve(&c(CommandKind::AddTask, None, Some("3")), &names), Err("unknown_waypoint"));
-        assert_eq!(resolve(&c(CommandKind::AddTask, None, None), &names), Err("unknown_waypoint"));
+        assert_eq!(
+            resolve(&c(CommandKind::AddTask, None, Some("nowhere")), &names),
+            Err("unknown_waypoint")
+        );
+        assert_eq!(
+            resolve(&c(CommandKind::AddTask, None, Some("3")), &names),
+            Err("unknown_waypoint")
+        );
+        assert_eq!(
+            resolve(&c(CommandKind::AddTask, None, None), &names),
+            Err("unknown_waypoint")
+        );
         assert_eq!(
             resolve(&c(CommandKind::SetTimeBudget, Some(f64::NAN), None), &names),
             Err("budget_out_of_range")

@@ -546,7 +546,10 @@ mod tests {
         assert_eq!(PlanMsg::of(&p).type_name, types::PLAN);
         assert_eq!(State::of(&boxed_zeroed::<VehicleState>()).type_name, types::STATE);
         assert_eq!(Status::of(&boxed_zeroed::<PlannerStatus>()).type_name, types::STATUS);
-        assert_eq!(Snapshot::of(&boxed_zeroed::<WaypointSnapshot>()).type_name, types::SNAPSHOT);
+        assert_eq!(
+            Snapshot::of(&boxed_zeroed::<WaypointSnapshot>()).type_name,
+            types::SNAPSHOT
+        );
         assert_eq!(Ack::of(&boxed_zeroed::<CommandAck>()).type_name, types::ACK);
     }
 
@@ -568,8 +571,14 @@ mod tests {
         let e = decode::<PlanMsg>(&bytes, types::STATE).unwrap_err();
         assert!(matches!(e, DecodeError::Type { .. }), "{e}");
         let v2 = String::from_utf8(bytes).unwrap().replace(FORMAT, "auv-shore/2");
-        assert!(matches!(decode::<PlanMsg>(v2.as_bytes(), types::PLAN), Err(DecodeError::Format { .. })));
-        assert!(matches!(decode::<PlanMsg>(b"{]", types::PLAN), Err(DecodeError::Json { .. })));
+        assert!(matches!(
+            decode::<PlanMsg>(v2.as_bytes(), types::PLAN),
+            Err(DecodeError::Format { .. })
+        ));
+        assert!(matches!(
+            decode::<PlanMsg>(b"{]", types::PLAN),
+            Err(DecodeError::Json { .. })
+        ));
     }
 
     #[test]

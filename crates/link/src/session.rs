@@ -107,7 +107,13 @@ mod tests {
     #[test]
     fn endpoints_must_be_tcp_host_port() {
         assert!(check_endpoint("tcp/127.0.0.1:7447").is_ok());
-        for bad in ["udp/1.2.3.4:5", "tcp/127.0.0.1", "tcp/:80", "tcp/h:99999", "127.0.0.1:7447"] {
+        for bad in [
+            "udp/1.2.3.4:5",
+            "tcp/127.0.0.1",
+            "tcp/:80",
+            "tcp/h:99999",
+            "127.0.0.1:7447",
+        ] {
             let e = check_endpoint(bad).unwrap_err();
             assert!(e.to_string().contains("tcp/HOST:PORT"), "{e}");
         }
@@ -118,7 +124,11 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("auv-link-cfg-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let f = dir.join("z.json5");
-        std::fs::write(&f, "{ scouting: { multicast: { enabled: true }, gossip: { enabled: true } } }").unwrap();
+        std::fs::write(
+            &f,
+            "{ scouting: { multicast: { enabled: true }, gossip: { enabled: true } } }",
+        )
+        .unwrap();
         let cfg = config(Side::Shore, "tcp/127.0.0.1:7447", Some(&f)).unwrap();
         assert_eq!(cfg.get_json("scouting/multicast/enabled").unwrap(), "false");
         assert_eq!(cfg.get_json("scouting/gossip/enabled").unwrap(), "false");

@@ -609,7 +609,11 @@ impl PlannerCore {
                 t,
                 id: c.command_id,
                 kind,
-                status: if verdict.is_ok() { AckStatus::Applied } else { AckStatus::Refused },
+                status: if verdict.is_ok() {
+                    AckStatus::Applied
+                } else {
+                    AckStatus::Refused
+                },
                 reason: verdict.err().unwrap_or(RefuseReason::None),
                 value,
                 repeat: false,
@@ -703,7 +707,6 @@ impl PlannerCore {
             each(&r);
         }
     }
-
 
     /// Where the vehicle will be free, its budget from there and what to exclude.
     fn planning_frame(&self) -> (usize, f64, NodeSet) {
@@ -1179,7 +1182,9 @@ mod tests {
         let inst = random_instance(20, 0.35, 20_000.0, 7);
         let mut c = core();
         let mut log = Vec::new();
-        let r = c.on_command(&command(1, CommandKind::AbortToGoal, 0.0, 0), mono_now_ns(), &mut |e| log.push(*e));
+        let r = c.on_command(&command(1, CommandKind::AbortToGoal, 0.0, 0), mono_now_ns(), &mut |e| {
+            log.push(*e)
+        });
         assert_eq!(r.map(|r| r.reason), Some(RefuseReason::NotRunning as u32));
         let (mut c, first) = core_with_first_plan(&inst);
         let mut sink = |_: &ServiceEvent| {};
@@ -1188,9 +1193,18 @@ mod tests {
             .find(|n| !first.route.iter().any(|id| id as u32 == *n))
             .unwrap();
         for (cmd, why) in [
-            (command(2, CommandKind::SetTimeBudget, 1e9, 0), RefuseReason::BudgetOutOfRange),
-            (command(3, CommandKind::SetTimeBudget, 0.5, 0), RefuseReason::BudgetOutOfRange),
-            (command(4, CommandKind::RemoveTask, 0.0, goal), RefuseReason::BadWaypoint),
+            (
+                command(2, CommandKind::SetTimeBudget, 1e9, 0),
+                RefuseReason::BudgetOutOfRange,
+            ),
+            (
+                command(3, CommandKind::SetTimeBudget, 0.5, 0),
+                RefuseReason::BudgetOutOfRange,
+            ),
+            (
+                command(4, CommandKind::RemoveTask, 0.0, goal),
+                RefuseReason::BadWaypoint,
+            ),
             (command(5, CommandKind::RemoveTask, 0.0, 0), RefuseReason::BadWaypoint),
             (command(6, CommandKind::RemoveTask, 0.0, 99), RefuseReason::BadWaypoint),
             (command(7, CommandKind::AddTask, 0.0, off_plan), RefuseReason::NoChange),
@@ -1206,7 +1220,13 @@ mod tests {
             assert_eq!((r.status, r.reason), (AckStatus::Refused as u32, why as u32), "{cmd:?}");
             assert!(!c.has_pending(), "a refused command changes nothing");
         }
-        assert!(log.iter().all(|e| matches!(e, ServiceEvent::Command { status: AckStatus::Refused, .. })));
+        assert!(log.iter().all(|e| matches!(
+            e,
+            ServiceEvent::Command {
+                status: AckStatus::Refused,
+                ..
+            }
+        )));
     }
 
     #[test]
@@ -1216,20 +1236,33 @@ mod tests {
         let mut log = Vec::new();
         let off = first.route.get(2) as u32;
         let cmd = command(11, CommandKind::RemoveTask, 0.0, off);
-        assert_eq!(c.on_command(&cmd, mono_now_ns(), &mut |e| log.push(*e)), None, "the ack waits for the plan");
+        assert_eq!(
+            c.on_command(&cmd, mono_now_ns(), &mut |e| log.push(*e)),
+            None,
+            "the ack waits for the plan"
+        );
         assert!(c.has_pending() && c.has_pending_acks());
         // The same id while its plan is being made: still one command.
         assert_eq!(c.on_command(&cmd, mono_now_ns(), &mut |e| log.push(*e)), None);
         let r = c.replan().unwrap().unwrap();
         assert_eq!(r.trigger, TriggerKind::Operator);
-        assert!(r.route.iter().all(|id| id as u32 != off), "{:?} passes the removed {off}", r.route);
+        assert!(
+            r.route.iter().all(|id| id as u32 != off),
+            "{:?} passes the removed {off}",
+            r.route
+        );
         let mut acks = Vec::new();
         c.take_acks(77, r.replan, &mut |a| acks.push(*a));
         assert_eq!(acks.len(), 1);
-        assert_eq!((acks[0].id, acks[0].plan_seq, acks[0].status), (11, 77, AckStatus::Applied as u32));
+        assert_eq!(
+            (acks[0].id, acks[0].plan_seq, acks[0].status),
+            (11, 77, AckStatus::Applied as u32)
+        );
         assert!(!c.has_pending_acks());
         // After a reconnect the console sends it again: the same answer, nothing re-planned.
-        let again = c.on_command(&cmd, mono_now_ns(), &mut |e| log.push(*e)).expect("answered at once");
+        let again = c
+            .on_command(&cmd, mono_now_ns(), &mut |e| log.push(*e))
+            .expect("answered at once");
         assert_eq!(again, acks[0]);
         assert!(!c.has_pending());
         let repeats = log
@@ -1244,11 +1277,21 @@ mod tests {
         let inst = random_instance(20, 0.35, 20_000.0, 7);
         let (mut c, _) = core_with_first_plan(&inst);
         let mut sink = |_: &ServiceEvent| {};
-        assert_eq!(c.on_command(&command(21, CommandKind::SetTimeBudget, 12_000.0, 0), mono_now_ns(), &mut sink), None);
+        assert_eq!(
+            c.on_command(
+                &command(21, CommandKind::SetTimeBudget, 12_000.0, 0),
+                mono_now_ns(),
+                &mut sink
+            ),
+            None
+        );
         let r = c.replan().unwrap().unwrap();
         // The vehicle has used 11 000 s of 31 000: 1 000 s are left of 12 000.
         assert!(r.budget_s <= 12_000.0 - 11_000.0, "{}", r.budget_s);
-        assert_eq!(c.on_command(&command(22, CommandKind::AbortToGoal, 0.0, 0), mono_now_ns(), &mut sink), None);
+        assert_eq!(
+            c.on_command(&command(22, CommandKind::AbortToGoal, 0.0, 0), mono_now_ns(), &mut sink),
+            None
+        );
         let r = c.replan().unwrap().unwrap();
         assert_eq!(r.route.last(), Some(inst.goal));
         assert!(r.budget_s < 0.01, "{}", r.budget_s);

@@ -209,19 +209,19 @@ where
             handled += 1;
             match result {
                 Ok(r) => {
-                if !ports.inject_plans.is_empty() {
-                    ports.inject_plan(core, &r)?;
-                }
-                let plan_seq = ports.plans.publish(&mut |m: &mut Plan| core.fill_plan(&r, m))?;
-                core.published(&r, mono_now_ns(), events);
-                if core.has_pending_acks() {
-                    ports.publish_acks(core, plan_seq, r.replan)?;
-                }
-                // Warm-up ends after the status that follows this plan: the
-                // first send of each port connects it to its consumers
-                // (iceoryx2 opens a notifier's listener connections lazily,
-                // which allocates).
-                arm_steady |= core.counters().plans == warmup;
+                    if !ports.inject_plans.is_empty() {
+                        ports.inject_plan(core, &r)?;
+                    }
+                    let plan_seq = ports.plans.publish(&mut |m: &mut Plan| core.fill_plan(&r, m))?;
+                    core.published(&r, mono_now_ns(), events);
+                    if core.has_pending_acks() {
+                        ports.publish_acks(core, plan_seq, r.replan)?;
+                    }
+                    // Warm-up ends after the status that follows this plan: the
+                    // first send of each port connects it to its consumers
+                    // (iceoryx2 opens a notifier's listener connections lazily,
+                    // which allocates).
+                    arm_steady |= core.counters().plans == warmup;
                 }
                 // No route to the goal: the commands are answered without a plan.
                 Err(_) if core.has_pending_acks() => ports.publish_acks(core, 0, 0)?,

@@ -22,9 +22,9 @@ use serde_json::{Value, json};
 use crate::{OnTopic, Role, Topic};
 use auv_core::problem::MAX_NODES;
 use auv_messages::msg::{
-    AckStatus, AllocCounters, CommandAck, CommandKind, Header, OperatorCommand, RefuseReason, MAX_EDGES, NO_NODE, ObjectiveCode, Outcome, Plan, PlannerPhase, PlannerStatus, REJECT_KINDS,
-    RejectKind, TriggerKind, VehicleEvent, VehicleMode, VehicleState, WIRE_VERSION, WaypointSnapshot, WireEdge,
-    WireNode,
+    AckStatus, AllocCounters, CommandAck, CommandKind, Header, MAX_EDGES, NO_NODE, ObjectiveCode, OperatorCommand,
+    Outcome, Plan, PlannerPhase, PlannerStatus, REJECT_KINDS, RefuseReason, RejectKind, TriggerKind, VehicleEvent,
+    VehicleMode, VehicleState, WIRE_VERSION, WaypointSnapshot, WireEdge, WireNode,
 };
 
 /// A type as it appears in a field.

@@ -607,7 +607,8 @@ impl<W: Write + Seek> ChannelWriter<W> {
             log_time: t_ns,
             publish_time: t_ns,
         };
-        self.writer.write_to_known_channel(&header, data.to_string().as_bytes())?;
+        self.writer
+            .write_to_known_channel(&header, data.to_string().as_bytes())?;
         Ok(())
     }
 

@@ -543,7 +543,8 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let report_path = out.join("report.json");
     let mut report_json = report.to_json();
     if let Some(ep) = &a.shore {
-        let link = super::shore_report::shore_link_json(&out, ep, a.link.link_timeout_ms, run.link_restarts.unwrap_or(0));
+        let link =
+            super::shore_report::shore_link_json(&out, ep, a.link.link_timeout_ms, run.link_restarts.unwrap_or(0));
         report_json["shore_link"] = link;
     }
     let text = serde_json::to_string_pretty(&report_json).unwrap_or_default();

@@ -27,7 +27,10 @@ pub fn shore_link_json(out: &Path, endpoint: &str, timeout_ms: u64, restarts: u6
             .count()
     };
     let mut refused_by = serde_json::Map::new();
-    for c in commands.iter().filter(|c| c["status"] == "refused" && c["repeat"] == false) {
+    for c in commands
+        .iter()
+        .filter(|c| c["status"] == "refused" && c["repeat"] == false)
+    {
         let r = c["reason"].as_str().unwrap_or("unknown").to_string();
         let n = refused_by.get(&r).and_then(Value::as_u64).unwrap_or(0);
         refused_by.insert(r, json!(n + 1));

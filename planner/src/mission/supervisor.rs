@@ -540,7 +540,11 @@ pub(super) fn supervise(
                     lk.restart_at = Some(now + lk.backoff);
                     lk.backoff = (lk.backoff * 2).min(LINK_BACKOFF_MAX);
                     eprintln!("planner: shore link exited ({st}); restarting it, the mission goes on");
-                    note(&mut flog, t, json!({"event": "exited", "process": "link", "status": st}));
+                    note(
+                        &mut flog,
+                        t,
+                        json!({"event": "exited", "process": "link", "status": st}),
+                    );
                 }
             }
             match lk.restart_at {

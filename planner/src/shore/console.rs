@@ -138,7 +138,9 @@ impl Recorder {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         let open = |name: &str| {
             let p = dir.join(name);
-            File::create(&p).map(BufWriter::new).map_err(|e| format!("{}: {e}", p.display()))
+            File::create(&p)
+                .map(BufWriter::new)
+                .map_err(|e| format!("{}: {e}", p.display()))
         };
         let log = open("shore.log")?;
         let mcap = ChannelWriter::new(open("shore.mcap")?, vehicle, &[])
@@ -158,9 +160,17 @@ impl Recorder {
         let _ = writeln!(self.log, "{text}");
         let _ = self.log.flush();
         self.lines += 1;
-        let level = if v["event"] == "link_lost" || v["status"] == "refused" { 3 } else { 2 };
+        let level = if v["event"] == "link_lost" || v["status"] == "refused" {
+            3
+        } else {
+            2
+        };
         let t_ns = mcap_log::log_time_ns(t);
-        self.mcap_write(Topic::Events, t_ns, &mcap_log::log_message(t_ns, level, &text, "shore", "shore.log", self.lines));
+        self.mcap_write(
+            Topic::Events,
+            t_ns,
+            &mcap_log::log_message(t_ns, level, &text, "shore", "shore.log", self.lines),
+        );
     }
 
     fn mcap_write(&mut self, topic: Topic, t_ns: u64, data: &Value) {
@@ -185,7 +195,11 @@ impl Recorder {
 }
 
 fn pos3(p: [f64; 3]) -> Vec3 {
-    Vec3 { x: p[0], y: p[1], z: p[2] }
+    Vec3 {
+        x: p[0],
+        y: p[1],
+        z: p[2],
+    }
 }
 
 /// Applies one message to the view and the recording.
@@ -201,10 +215,20 @@ fn take(view: &mut View, rec: &mut Option<Recorder>, r: Received) {
             }
             view.prev_pos = Some(s.position);
             if let Some(rec) = rec {
-                rec.mcap_write(Topic::Pose, t_ns, &mcap_log::pose_message(t_ns, pos3(s.position), view.yaw));
+                rec.mcap_write(
+                    Topic::Pose,
+                    t_ns,
+                    &mcap_log::pose_message(t_ns, pos3(s.position), view.yaw),
+                );
                 if s.event == "arrival" && !r.catch_up {
                     let node = u64::from(s.to_node);
-                    let msg = mcap_log::progress_message(s.origin.t, node, u64::from(s.tasks_completed), s.weight, s.time_left_s);
+                    let msg = mcap_log::progress_message(
+                        s.origin.t,
+                        node,
+                        u64::from(s.tasks_completed),
+                        s.weight,
+                        s.time_left_s,
+                    );
                     rec.mcap_write(Topic::Progress, t_ns, &msg);
                 }
             }
@@ -222,7 +246,8 @@ fn take(view: &mut View, rec: &mut Option<Recorder>, r: Received) {
             if !seen {
                 view.plan_seqs.entry(p.origin.session).or_default().push(p.origin.seq);
                 if live {
-                    view.latency_ns.push(r.recv_mono_ns.saturating_sub(p.origin.sent_mono_ns));
+                    view.latency_ns
+                        .push(r.recv_mono_ns.saturating_sub(p.origin.sent_mono_ns));
                 } else {
                     // A plan missed while the link was down, from the bridge's history.
                     view.plans_catch_up += 1;
@@ -238,10 +263,18 @@ fn take(view: &mut View, rec: &mut Option<Recorder>, r: Received) {
                 {
                     let pts: Vec<Vec3> = route
                         .iter()
-                        .map(|&n| Vec3 { x: snap.nodes[n][0], y: snap.nodes[n][1], z: 0.0 })
+                        .map(|&n| Vec3 {
+                            x: snap.nodes[n][0],
+                            y: snap.nodes[n][1],
+                            z: 0.0,
+                        })
                         .collect();
                     let first = view.plans() <= 1;
-                    rec.mcap_write(Topic::Plan, t_ns, &mcap_log::plan_message(t_ns, u64::from(p.replan), &route, &pts, first));
+                    rec.mcap_write(
+                        Topic::Plan,
+                        t_ns,
+                        &mcap_log::plan_message(t_ns, u64::from(p.replan), &route, &pts, first),
+                    );
                 }
                 let figures = PlanFigures {
                     t: p.origin.t,
@@ -287,9 +320,9 @@ fn take(view: &mut View, rec: &mut Option<Recorder>, r: Received) {
 
 fn render(view: &View, link: &ShoreLink, a: &ShoreArgs) -> String {
     let mut o = String::new();
-    let age = view
-        .last_msg
-        .map_or("never".to_string(), |t| format!("{:.1} s ago", t.elapsed().as_secs_f64()));
+    let age = view.last_msg.map_or("never".to_string(), |t| {
+        format!("{:.1} s ago", t.elapsed().as_secs_f64())
+    });
     let m = link.monitor();
     o += &format!(
         "{} at {}: link {} (last message {age}; lost {} times, restored {})\n",
@@ -303,7 +336,15 @@ fn render(view: &View, link: &ShoreLink, a: &ShoreArgs) -> String {
         Some(s) => {
             o += &format!(
                 "  t {:.0} s, time left {:.0} s, at ({:.0}, {:.0}) m, {} -> waypoint {}, tasks {}, weight {:.1}, outcome {}\n",
-                s.origin.t, s.time_left_s, s.position[0], s.position[1], s.mode, s.to_node, s.tasks_completed, s.weight, s.outcome
+                s.origin.t,
+                s.time_left_s,
+                s.position[0],
+                s.position[1],
+                s.mode,
+                s.to_node,
+                s.tasks_completed,
+                s.weight,
+                s.outcome
             );
         }
         None => o += "  no vehicle state yet\n",
@@ -380,9 +421,8 @@ fn command_of(a: &ShoreArgs) -> Result<Option<Command>, String> {
     let Some(name) = &a.command else {
         return Ok(None);
     };
-    let kind = CommandKind::from_name(name).ok_or_else(|| {
-        format!("--command {name}: expected abort-to-goal, set-time-budget, add-task or remove-task")
-    })?;
+    let kind = CommandKind::from_name(name)
+        .ok_or_else(|| format!("--command {name}: expected abort-to-goal, set-time-budget, add-task or remove-task"))?;
     match kind {
         CommandKind::SetTimeBudget => match a.budget_s {
             Some(b) if b.is_finite() && b > 0.0 => {}
@@ -400,7 +440,9 @@ fn command_of(a: &ShoreArgs) -> Result<Option<Command>, String> {
         a.command_id.unwrap_or_else(fresh_id),
         kind,
         a.budget_s.filter(|_| kind == CommandKind::SetTimeBudget),
-        a.waypoint.clone().filter(|_| matches!(kind, CommandKind::AddTask | CommandKind::RemoveTask)),
+        a.waypoint
+            .clone()
+            .filter(|_| matches!(kind, CommandKind::AddTask | CommandKind::RemoveTask)),
     )))
 }
 
@@ -417,7 +459,9 @@ fn send_command(link: &mut ShoreLink, c: &Command, give_up: Duration) -> Result<
         }
         let mut ack = None;
         let changes = link.poll(Duration::from_millis(50), &mut |r| {
-            if let Ok(Received { msg: Incoming::Ack(a), .. }) = r
+            if let Ok(Received {
+                msg: Incoming::Ack(a), ..
+            }) = r
                 && a.id == c.id
             {
                 ack = Some(a);
@@ -548,12 +592,18 @@ fn shore(a: &ShoreArgs) -> Result<u8, (u8, String)> {
             if let Some(rec) = &mut rec {
                 let _ = rec.finish(&summary(&view, &link, a));
             }
-            return Err((1, format!("no message from {} at {} within {g} s", a.vehicle, a.connect)));
+            return Err((
+                1,
+                format!("no message from {} at {} within {g} s", a.vehicle, a.connect),
+            ));
         }
     };
     let s = summary(&view, &link, a);
     if let Some(rec) = &mut rec {
-        rec.line(view.state.as_ref().map_or(0.0, |s| s.origin.t), json!({"event": "finished", "outcome": view.ended}));
+        rec.line(
+            view.state.as_ref().map_or(0.0, |s| s.origin.t),
+            json!({"event": "finished", "outcome": view.ended}),
+        );
         rec.finish(&s).map_err(|e| (1, e))?;
     }
     if !a.quiet {

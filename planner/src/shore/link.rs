@@ -56,8 +56,12 @@ fn link(a: &LinkArgs) -> Result<(), (u8, String)> {
     drop(world);
     let opts = a.ipc.options().map_err(|e| usage(e.to_string()))?;
     let ctx = IpcContext::<Shm>::new(&opts, "link").map_err(|e| (1, e.to_string()))?;
-    let session = auv_link::session::open(auv_link::session::Side::Onboard, &a.listen, a.link.zenoh_config.as_deref())
-        .map_err(|e| (1, e.to_string()))?;
+    let session = auv_link::session::open(
+        auv_link::session::Side::Onboard,
+        &a.listen,
+        a.link.zenoh_config.as_deref(),
+    )
+    .map_err(|e| (1, e.to_string()))?;
     let s = run_bridge(&ctx, &session, &cfg).map_err(|e| (1, e.to_string()))?;
     eprintln!(
         "planner link: forwarded {} messages; link lost {} times, restored {} times; commands applied {}, refused {}",
