@@ -130,6 +130,17 @@ impl LandChart {
         self.land.iter().map(|l| &l.polygon)
     }
 
+    /// Each land polygon's rings (the exterior, then its holes) as (x, y)
+    /// in the local frame, m: for writers that know nothing of `geo`.
+    pub fn rings(&self) -> impl Iterator<Item = Vec<Vec<(f64, f64)>>> + '_ {
+        self.polygons().map(|p| {
+            std::iter::once(p.exterior())
+                .chain(p.interiors())
+                .map(|r| r.coords().map(|c| (c.x, c.y)).collect())
+                .collect()
+        })
+    }
+
     fn has_water(&self) -> bool {
         let g = WATER_CHECK_GRID;
         (0..g * g).any(|k| {
