@@ -25,6 +25,7 @@
 
 #![warn(missing_docs)]
 
+pub mod faulty;
 pub mod guard;
 pub mod ipc;
 pub mod layout;
