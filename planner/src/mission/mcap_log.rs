@@ -812,6 +812,8 @@ pub struct McapSummary {
     pub plans: Vec<Vec<usize>>,
     /// Last vehicle pose: x, y, z (up), m, and heading, degrees from east.
     pub final_pose: Option<(f64, f64, f64, f64)>,
+    /// Last location fix: latitude, longitude, degrees (lat/lon missions).
+    pub final_fix: Option<(f64, f64)>,
     /// Outcome of the `finished` event, if logged.
     pub outcome: Option<String>,
 }
@@ -830,6 +832,7 @@ pub fn read_summary(bytes: &[u8]) -> Result<McapSummary, McapLogError> {
     let mut span: Option<(u64, u64)> = None;
     let mut plans = Vec::new();
     let mut final_pose = None;
+    let mut final_fix = None;
     let mut outcome = None;
     for m in mcap::MessageStream::new(bytes)? {
         let m = m?;
@@ -866,6 +869,12 @@ pub fn read_summary(bytes: &[u8]) -> Result<McapSummary, McapLogError> {
             };
             let yaw = 2.0 * f(&q["z"])?.atan2(f(&q["w"])?);
             final_pose = Some((f(&p["x"])?, f(&p["y"])?, f(&p["z"])?, yaw.to_degrees()));
+        } else if schema == "foxglove.LocationFix" {
+            let v = parse()?;
+            match (v["latitude"].as_f64(), v["longitude"].as_f64()) {
+                (Some(lat), Some(lon)) => final_fix = Some((lat, lon)),
+                _ => return Err(not_mission(&topic, "a fix without latitude and longitude")),
+            }
         } else if schema == "foxglove.Log" {
             let v = parse()?;
             if let Some(text) = v["message"].as_str()
@@ -882,6 +891,7 @@ pub fn read_summary(bytes: &[u8]) -> Result<McapSummary, McapLogError> {
         span_s: span.map(|(a, b)| (s(a), s(b))),
         plans,
         final_pose,
+        final_fix,
         outcome,
     })
 }
@@ -915,6 +925,10 @@ impl McapSummary {
                 );
             }
             None => o.push_str("final pose: none\n"),
+        }
+        if let Some((lat, lon)) = self.final_fix {
+            let (ns, ew) = (if lat < 0.0 { 'S' } else { 'N' }, if lon < 0.0 { 'W' } else { 'E' });
+            let _ = writeln!(o, "final fix: {:.5}° {ns}, {:.5}° {ew}", lat.abs(), lon.abs());
         }
         let _ = writeln!(o, "outcome: {}", self.outcome.as_deref().unwrap_or("not logged"));
         o
@@ -992,6 +1006,18 @@ mod tests {
         (log, journal)
     }
 
+    /// The record of a reproducible mission of vehicle `auv1` in local metres.
+    fn record<'a>(w: &'a MissionWorld, poses: &'a [PoseAt], visits: &'a [Visit]) -> MissionRecord<'a> {
+        MissionRecord {
+            world: w,
+            poses,
+            visits,
+            vehicle: "auv1",
+            latency_us: None,
+            geo: None,
+        }
+    }
+
     fn bytes(rec: &MissionRecord, log: &str) -> Vec<u8> {
         write_to(rec, log.as_bytes(), Cursor::new(Vec::new()))
             .unwrap()
@@ -1057,12 +1083,8 @@ mod tests {
         let (log, journal) = records(&w);
         let (track, visits) = (poses(&journal, w.world()), visits(&journal));
         let rec = MissionRecord {
-            world: &w,
-            poses: &track,
-            visits: &visits,
             vehicle: "auv7",
-            latency_us: None,
-            geo: None,
+            ..record(&w, &track, &visits)
         };
         let s = read_summary(&bytes(&rec, &log)).unwrap();
         let topics: Vec<&str> = s.channels.iter().map(|c| c.topic.as_str()).collect();
@@ -1101,14 +1123,7 @@ mod tests {
         let w = world();
         let (log, journal) = records(&w);
         let (track, visits) = (poses(&journal, w.world()), visits(&journal));
-        let rec = MissionRecord {
-            world: &w,
-            poses: &track,
-            visits: &visits,
-            vehicle: "auv1",
-            latency_us: None,
-            geo: None,
-        };
+        let rec = record(&w, &track, &visits);
         assert_eq!(bytes(&rec, &log), bytes(&rec, &log));
     }
 
@@ -1117,14 +1132,7 @@ mod tests {
         let w = world();
         let (log, journal) = records(&w);
         let (track, visits) = (poses(&journal, w.world()), visits(&journal));
-        let rec = MissionRecord {
-            world: &w,
-            poses: &track,
-            visits: &visits,
-            vehicle: "auv1",
-            latency_us: None,
-            geo: None,
-        };
+        let rec = record(&w, &track, &visits);
         let msgs = messages(&rec, &log).unwrap();
         assert!(msgs.windows(2).all(|m| m[0].t_ns <= m[1].t_ns));
         let (a, b) = (track[0].p, track[1].p);
@@ -1156,12 +1164,9 @@ mod tests {
         let (log, journal) = records(&w);
         let (track, visits) = (poses(&journal, w.world()), visits(&journal));
         let rec = MissionRecord {
-            world: &w,
-            poses: &track,
-            visits: &visits,
-            vehicle: "auv1",
             latency_us: Some((10, 20, 30)),
             geo: Some(frame),
+            ..record(&w, &track, &visits)
         };
         let msgs = messages(&rec, &log).unwrap();
         assert!(msgs.windows(2).all(|m| m[0].t_ns <= m[1].t_ns));
@@ -1192,6 +1197,12 @@ mod tests {
             .filter(|f| f["geometry"]["type"] == "Point")
             .count();
         assert_eq!(points, w.world().n(), "every waypoint on the map");
+        let summary = read_summary(&bytes(&rec, &log)).unwrap();
+        let last = frame
+            .to_geodetic(track[track.len() - 1].p.x, track[track.len() - 1].p.y)
+            .unwrap();
+        assert_eq!(summary.final_fix, Some((last.lat, last.lon)));
+        assert!(summary.render().contains("final fix: "), "{}", summary.render());
         let lat = msgs.iter().find(|m| m.topic == Topic::Latency).unwrap();
         assert_eq!(lat.data["p99_us"], 20);
         assert_eq!(lat.data["plans"], 2);
@@ -1202,14 +1213,7 @@ mod tests {
     fn a_bad_log_line_is_named() {
         let w = world();
         let log = "{\"event\":\"plan\",\"t\":1.0,\"replan\":0,\"route\":[0,999]}\n";
-        let rec = MissionRecord {
-            world: &w,
-            poses: &[],
-            visits: &[],
-            vehicle: "auv1",
-            latency_us: None,
-            geo: None,
-        };
+        let rec = record(&w, &[], &[]);
         let e = write_to(&rec, log.as_bytes(), Cursor::new(Vec::new()))
             .unwrap_err()
             .to_string();
@@ -1227,14 +1231,7 @@ mod tests {
         let w = world();
         let (log, journal) = records(&w);
         let (track, visits) = (poses(&journal, w.world()), visits(&journal));
-        let rec = MissionRecord {
-            world: &w,
-            poses: &track,
-            visits: &visits,
-            vehicle: "auv1",
-            latency_us: None,
-            geo: None,
-        };
+        let rec = record(&w, &track, &visits);
         let b = bytes(&rec, &log);
         for cut in [0, 4, b.len() / 3, b.len() - 1] {
             assert!(
