@@ -480,6 +480,56 @@ pub fn summary_table(records: &[RunRecord]) -> String {
             );
         }
     }
+    out.push_str(&paired_table(records));
+    out
+}
+
+/// Paired comparisons of the first algorithm with each other one, run by
+/// run on the same networks: the mean difference (first − other) of the
+/// deterministic figures with a 95 % confidence interval (normal
+/// approximation, 1.96 standard errors), and the median ratio of CPU times
+/// (a ratio within one run cancels most of a shared machine's drift).
+/// Empty with fewer than two algorithms or two runs.
+pub fn paired_table(records: &[RunRecord]) -> String {
+    use std::fmt::Write;
+    let algs = algorithms_of(records);
+    let mut out = String::new();
+    let Some((&first, others)) = algs.split_first() else {
+        return out;
+    };
+    let of = |alg: &str| -> Vec<&RunRecord> { records.iter().filter(|r| r.algorithm == alg).collect() };
+    let a = of(first);
+    for &other in others {
+        let b = of(other);
+        if a.len() < 2 || a.len() != b.len() {
+            continue;
+        }
+        let _ = writeln!(out, "\npaired, {first} − {other} over {} runs (95 % CI):", a.len());
+        for (name, unit, get) in METRICS.iter().filter(|(n, ..)| !matches!(*n, "cpu_time" | "feasible" | "warm_start")) {
+            let d = Summary::of(a.iter().zip(&b).map(|(x, y)| get(x) - get(y)));
+            let half = 1.96 * d.std / (a.len() as f64).sqrt();
+            let label = if unit.is_empty() {
+                name.to_string()
+            } else {
+                format!("{name} ({unit})")
+            };
+            let _ = writeln!(
+                out,
+                "  {label:<28} {:>12}  [{}, {}]",
+                fmt_num(d.mean),
+                fmt_num(d.mean - half),
+                fmt_num(d.mean + half)
+            );
+        }
+        let mut ratios: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x.cpu_ms / y.cpu_ms).collect();
+        ratios.sort_by(f64::total_cmp);
+        let _ = writeln!(
+            out,
+            "  {:<28} {:>12}  (median of per-run ratios)",
+            "cpu_time ratio",
+            fmt_num(ratios[ratios.len() / 2])
+        );
+    }
     out
 }
 
@@ -816,9 +866,14 @@ mod tests {
         );
         assert_eq!(lines.count(), records.len());
         let table = summary_table(&records);
-        for m in ["cost", "cpu_time (ms)", "feasible (rate)", "weight"] {
+        for m in ["cost", "cpu_time (ms)", "feasible (rate)", "weight", "paired, a − b over 6 runs"] {
             assert!(table.contains(m), "{m} missing from\n{table}");
         }
+        // The paired mean difference is the difference of the means.
+        let mean = |alg: &str| Summary::of(records.iter().filter(|r| r.algorithm == alg).map(|r| r.weight)).mean;
+        let line = table.lines().find(|l| l.trim_start().starts_with("weight ") && l.contains('[')).unwrap();
+        let shown: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+        assert!((shown - (mean("a") - mean("b"))).abs() < 1e-3, "{line}");
     }
 
     #[test]
