@@ -505,7 +505,10 @@ pub fn paired_table(records: &[RunRecord]) -> String {
             continue;
         }
         let _ = writeln!(out, "\npaired, {first} − {other} over {} runs (95 % CI):", a.len());
-        for (name, unit, get) in METRICS.iter().filter(|(n, ..)| !matches!(*n, "cpu_time" | "feasible" | "warm_start")) {
+        for (name, unit, get) in METRICS
+            .iter()
+            .filter(|(n, ..)| !matches!(*n, "cpu_time" | "feasible" | "warm_start"))
+        {
             let d = Summary::of(a.iter().zip(&b).map(|(x, y)| get(x) - get(y)));
             let half = 1.96 * d.std / (a.len() as f64).sqrt();
             let label = if unit.is_empty() {
@@ -579,6 +582,10 @@ fn write(path: &Path, text: &str) -> Result<(), StudyError> {
         message: e.to_string(),
     })
 }
+
+/// One Fig. 8 panel's texts and lines: title, plan label, re-plan label,
+/// plan points, re-plan points.
+type Fig8Panel = (String, String, String, Vec<(f64, f64)>, Vec<(f64, f64)>);
 
 /// Writes `runs.csv`, `summary.txt` and the figures into `dir` (which must
 /// exist). Returns the files written.
@@ -670,7 +677,7 @@ pub fn write_outputs(
         .filter_map(|a| records.iter().find(|r| r.run == 1 && r.algorithm == *a))
         .collect();
     if !firsts.is_empty() {
-        let texts: Vec<(String, String, String, Vec<(f64, f64)>, Vec<(f64, f64)>)> = firsts
+        let texts: Vec<Fig8Panel> = firsts
             .iter()
             .map(|r| {
                 let rp = &r.replan;
@@ -862,16 +869,29 @@ mod tests {
         let mut lines = text.lines();
         assert_eq!(
             lines.next(),
-            Some("run,algorithm,seed,cost,cpu_ms,route_time_s,distance_m,tasks,weight,violation_s,feasible")
+            Some(
+                "run,algorithm,seed,cost,cpu_ms,route_time_s,distance_m,tasks,weight,violation_s,feasible,\
+                 edges_changed,edges_changed_cold,replan_weight,replan_weight_cold,replan_feasible,warm_start"
+            )
         );
+        assert!(lines.clone().all(|l| l.split(',').count() == 17));
         assert_eq!(lines.count(), records.len());
         let table = summary_table(&records);
-        for m in ["cost", "cpu_time (ms)", "feasible (rate)", "weight", "paired, a − b over 6 runs"] {
+        for m in [
+            "cost",
+            "cpu_time (ms)",
+            "feasible (rate)",
+            "weight",
+            "paired, a − b over 6 runs",
+        ] {
             assert!(table.contains(m), "{m} missing from\n{table}");
         }
         // The paired mean difference is the difference of the means.
         let mean = |alg: &str| Summary::of(records.iter().filter(|r| r.algorithm == alg).map(|r| r.weight)).mean;
-        let line = table.lines().find(|l| l.trim_start().starts_with("weight ") && l.contains('[')).unwrap();
+        let line = table
+            .lines()
+            .find(|l| l.trim_start().starts_with("weight ") && l.contains('['))
+            .unwrap();
         let shown: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
         assert!((shown - (mean("a") - mean("b"))).abs() < 1e-3, "{line}");
     }

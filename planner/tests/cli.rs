@@ -1337,13 +1337,14 @@ fn montecarlo_knobs_change_one_thing_each_and_bad_values_are_refused() {
     ] {
         assert!(text.contains(needle), "{needle} missing from\n{text}");
     }
-    let o = path_str(&dir.join("bad"));
+    let bad = dir.join("bad");
+    let o = path_str(&bad);
     assert_usage_error(
         &planner(&["montecarlo", "--edge-density", "0", "--out", o]),
         &["--edge-density"],
     );
     assert_usage_error(
-        &planner(&["montecarlo", "--pso-velocity-clamp", "-1", "--out", o]),
+        &planner(&["montecarlo", "--pso-velocity-clamp", "0", "--out", o]),
         &["--pso-velocity-clamp"],
     );
     assert_usage_error(

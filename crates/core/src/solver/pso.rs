@@ -559,15 +559,31 @@ mod tests {
         let free = swarm(Walls::Free, VELOCITY_CLAMP_FRACTION);
         assert!(free.x[..cells].iter().any(|x| !(P_MIN..=P_MAX).contains(x)));
         assert!(p.evaluate(free.best().0).is_some_and(|e| e.feasible));
-        // Clamp: positions stay in range, but a particle on a wall may keep
-        // moving into it (an absorbing wall would have zeroed that).
         let clamp = swarm(Walls::Clamp, VELOCITY_CLAMP_FRACTION);
         assert!(clamp.x[..cells].iter().all(|x| (P_MIN..=P_MAX).contains(x)));
-        let pushing = |pso: &Pso| {
-            (0..cells).any(|c| (pso.x[c] == P_MAX && pso.v[c] > 0.0) || (pso.x[c] == P_MIN && pso.v[c] < 0.0))
+        // One dimension pushed through the top wall (w = 1, no pull): each
+        // rule's result.
+        let through = |walls| {
+            let (lo, hi) = match walls {
+                Walls::Free => (f32::NEG_INFINITY, f32::INFINITY),
+                _ => (P_MIN, P_MAX),
+            };
+            let k = Coefficients {
+                w: 1.0,
+                c1: 0.0,
+                c2: 0.0,
+                v_max: 60.0,
+                lo,
+                hi,
+                absorb: walls == Walls::Absorb,
+            };
+            let (mut x, mut v) = ([95.0f32], [20.0f32]);
+            update_row(&mut x, &mut v, &[0.0], &[0.0], &[0], k);
+            (x[0], v[0])
         };
-        assert!(pushing(&clamp));
-        assert!(!pushing(&swarm(Walls::Absorb, VELOCITY_CLAMP_FRACTION)));
+        assert_eq!(through(Walls::Absorb), (P_MAX, 0.0));
+        assert_eq!(through(Walls::Clamp), (P_MAX, 20.0));
+        assert_eq!(through(Walls::Free), (115.0, 20.0));
         // No clamp: speeds exceed the default clamp and stay finite.
         let unclamped = swarm(Walls::Absorb, f64::INFINITY);
         let v_default = (VELOCITY_CLAMP_FRACTION * (PRIORITY_MAX - PRIORITY_MIN)) as f32;
