@@ -35,7 +35,11 @@
 //!   the order of priorities, and a wall at the paper's range keeps the
 //!   encoding the paper's; zeroing the velocity stops particles grinding
 //!   against the wall for many iterations.
-//! - **Initial velocities** uniform in [−v_max, v_max].
+//! - **Initial velocities** uniform in [−v_max, v_max] (v_max at most the
+//!   range for this draw, so an unclamped swarm starts finite).
+//! - Both the clamp ([`PsoSettings::velocity_clamp`]) and the wall rule
+//!   ([`PsoSettings::walls`]) are settings, so experiments can vary them;
+//!   the defaults are the choices above.
 //! - **Warm start.** A tenth of the swarm (15 of 150, at least one particle)
 //!   starts near the warm route: particle 0 exactly on a vector that
 //!   decodes to it (priorities falling along the route from P_max, every
@@ -73,6 +77,23 @@ pub struct PsoSettings {
     pub inertia_start: f64,
     /// Inertia at the last iteration (paper: 0.5).
     pub inertia_end: f64,
+    /// Largest velocity per dimension as a fraction of the priority range
+    /// (our choice, [`VELOCITY_CLAMP_FRACTION`]; `f64::INFINITY`: no clamp).
+    pub velocity_clamp: f64,
+    /// What a particle leaving the priority range does (our choice,
+    /// [`Walls::Absorb`]).
+    pub walls: Walls,
+}
+
+/// The rule at the edges of the priority range (the paper is silent).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Walls {
+    /// Stop on the bound with zero velocity in that dimension (default).
+    Absorb,
+    /// Stop on the bound, keep the velocity.
+    Clamp,
+    /// No walls: positions may leave the range (decoding only compares them).
+    Free,
 }
 
 impl PsoSettings {
@@ -85,6 +106,8 @@ impl PsoSettings {
             c2: 2.5,
             inertia_start: 1.4,
             inertia_end: 0.5,
+            velocity_clamp: VELOCITY_CLAMP_FRACTION,
+            walls: Walls::Absorb,
         }
     }
 }
@@ -209,8 +232,8 @@ impl Pso {
     }
 
     /// Largest speed per dimension.
-    fn v_max() -> f32 {
-        (VELOCITY_CLAMP_FRACTION * (PRIORITY_MAX - PRIORITY_MIN)) as f32
+    fn v_max(&self) -> f32 {
+        (self.settings.velocity_clamp * (PRIORITY_MAX - PRIORITY_MIN)) as f32
     }
 
     /// Decodes particles `i` and `i + 1` together (see
@@ -306,6 +329,11 @@ struct Coefficients {
     c1: f32,
     c2: f32,
     v_max: f32,
+    /// The walls: positions stay in [lo, hi]; `absorb` zeroes the velocity
+    /// of a dimension that hit one.
+    lo: f32,
+    hi: f32,
+    absorb: bool,
 }
 
 /// One velocity-and-position update of a particle row; dimension `d` draws
@@ -324,10 +352,10 @@ fn update_row(x: &mut [f32], v: &mut [f32], pbest: &[f32], gbest: &[f32], bits: 
         vel = if vel > k.v_max { k.v_max } else { vel };
         vel = if vel < -k.v_max { -k.v_max } else { vel };
         let next = pos + vel;
-        let outside = !(P_MIN..=P_MAX).contains(&next);
-        let next = if next > P_MAX { P_MAX } else { next };
-        x[d] = if next < P_MIN { P_MIN } else { next };
-        v[d] = if outside { 0.0 } else { vel };
+        let outside = !(k.lo..=k.hi).contains(&next);
+        let next = if next > k.hi { k.hi } else { next };
+        x[d] = if next < k.lo { k.lo } else { next };
+        v[d] = if outside & k.absorb { 0.0 } else { vel };
     }
 }
 
@@ -364,11 +392,18 @@ fn update_swarm_avx2(pso: &mut Pso, w: f32) {
 #[inline(always)]
 fn update_swarm_generic(pso: &mut Pso, w: f32) {
     let stride = pso.stride;
+    let (lo, hi) = match pso.settings.walls {
+        Walls::Absorb | Walls::Clamp => (P_MIN, P_MAX),
+        Walls::Free => (f32::NEG_INFINITY, f32::INFINITY),
+    };
     let k = Coefficients {
         w,
         c1: pso.settings.c1 as f32,
         c2: pso.settings.c2 as f32,
-        v_max: Pso::v_max(),
+        v_max: pso.v_max(),
+        lo,
+        hi,
+        absorb: pso.settings.walls == Walls::Absorb,
     };
     let gbest = &pso.gbest[..stride];
     // The fill runs in whole blocks of the lane count; words past `stride`
@@ -402,7 +437,7 @@ impl Solver for Pso {
         self.lanes.seed(rng);
         let particles = self.settings.particles;
         let range = P_MAX - P_MIN;
-        let v_max = Self::v_max();
+        let v_max = self.v_max().min(P_MAX - P_MIN);
 
         for i in 0..particles {
             let row = i * stride..(i + 1) * stride;
@@ -495,10 +530,65 @@ mod tests {
             pso.step(&p, &mut rng);
             let cells = 20 * pso.stride;
             assert!(pso.x[..cells].iter().all(|x| (P_MIN..=P_MAX).contains(x)));
-            assert!(pso.v[..cells].iter().all(|v| v.abs() <= Pso::v_max()));
+            assert!(pso.v[..cells].iter().all(|v| v.abs() <= pso.v_max()));
         }
         // Some particles have hit a wall and been stopped there.
         assert!(pso.x[..20 * pso.stride].contains(&P_MAX));
+    }
+
+    #[test]
+    fn the_wall_rule_and_clamp_are_settings() {
+        let inst = random_instance(40, 0.4, 31_000.0, 2);
+        let p = Problem::from_instance(&inst).unwrap();
+        let swarm = |walls, velocity_clamp| {
+            let mut pso = Pso::new(PsoSettings {
+                particles: 20,
+                walls,
+                velocity_clamp,
+                ..PsoSettings::paper()
+            });
+            let mut rng = PlannerRng::new(1);
+            pso.start(&p, &mut rng, None);
+            for _ in 0..30 {
+                pso.step(&p, &mut rng);
+            }
+            pso
+        };
+        let cells = 20 * padded_len(40);
+        // Free walls: positions leave the range, the routes stay valid.
+        let free = swarm(Walls::Free, VELOCITY_CLAMP_FRACTION);
+        assert!(free.x[..cells].iter().any(|x| !(P_MIN..=P_MAX).contains(x)));
+        assert!(p.evaluate(free.best().0).is_some_and(|e| e.feasible));
+        let clamp = swarm(Walls::Clamp, VELOCITY_CLAMP_FRACTION);
+        assert!(clamp.x[..cells].iter().all(|x| (P_MIN..=P_MAX).contains(x)));
+        // One dimension pushed through the top wall (w = 1, no pull): each
+        // rule's result.
+        let through = |walls| {
+            let (lo, hi) = match walls {
+                Walls::Free => (f32::NEG_INFINITY, f32::INFINITY),
+                _ => (P_MIN, P_MAX),
+            };
+            let k = Coefficients {
+                w: 1.0,
+                c1: 0.0,
+                c2: 0.0,
+                v_max: 60.0,
+                lo,
+                hi,
+                absorb: walls == Walls::Absorb,
+            };
+            let (mut x, mut v) = ([95.0f32], [20.0f32]);
+            update_row(&mut x, &mut v, &[0.0], &[0.0], &[0], k);
+            (x[0], v[0])
+        };
+        assert_eq!(through(Walls::Absorb), (P_MAX, 0.0));
+        assert_eq!(through(Walls::Clamp), (P_MAX, 20.0));
+        assert_eq!(through(Walls::Free), (115.0, 20.0));
+        // No clamp: speeds exceed the default clamp and stay finite.
+        let unclamped = swarm(Walls::Absorb, f64::INFINITY);
+        let v_default = (VELOCITY_CLAMP_FRACTION * (PRIORITY_MAX - PRIORITY_MIN)) as f32;
+        assert!(unclamped.v[..cells].iter().any(|v| v.abs() > v_default));
+        assert!(unclamped.v[..cells].iter().all(|v| v.is_finite()));
     }
 
     #[test]

@@ -523,13 +523,27 @@ impl World {
         excluded: NodeSet,
         budget_s: f64,
     ) -> Result<(), ProblemError> {
+        self.fill_problem_with(problem, start, excluded, budget_s, |_, _| true)
+    }
+
+    /// [`World::fill_problem`] keeping only the edges (a, b), a < b, for
+    /// which `keep(a, b)` holds: a thinner network of the same waypoints
+    /// (e.g. for studies of network density). Does not allocate.
+    pub fn fill_problem_with(
+        &self,
+        problem: &mut Problem,
+        start: usize,
+        excluded: NodeSet,
+        budget_s: f64,
+        keep: impl Fn(usize, usize) -> bool,
+    ) -> Result<(), ProblemError> {
         let n = self.n();
         problem.begin(n, start, self.goal(), budget_s, self.config.objective, excluded)?;
         for (i, &prize) in self.prize.iter().enumerate() {
             problem.set_prize(i, prize);
         }
         for a in 0..n {
-            for b in self.adjacency[a].iter().filter(|&b| b > a) {
+            for b in self.adjacency[a].iter().filter(|&b| b > a && keep(a, b)) {
                 let d = self.distance_m(a, b);
                 let t = self.tasks[pair_index(a, b)];
                 problem.set_edge(
