@@ -183,7 +183,8 @@ mod avx512 {
         while base < len {
             // SAFETY: base + 16 ≤ len ≤ both lengths (asserted above).
             unsafe {
-                let m = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(rest as u16, _mm512_loadu_ps(reach.as_ptr().add(base)), s);
+                let m =
+                    _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(rest as u16, _mm512_loadu_ps(reach.as_ptr().add(base)), s);
                 acc = _mm512_mask_max_epi32(acc, m, acc, _mm512_loadu_si512(key.as_ptr().add(base).cast()));
             }
             rest >>= SCAN_BLOCK;
@@ -235,7 +236,12 @@ mod avx512 {
                 _mm512_shuffle_i64x2::<0b11_10_11_10>(x, y),
             )
         };
-        let h = [halves(a[0], a[1]), halves(a[2], a[3]), halves(a[4], a[5]), halves(a[6], a[7])];
+        let h = [
+            halves(a[0], a[1]),
+            halves(a[2], a[3]),
+            halves(a[4], a[5]),
+            halves(a[6], a[7]),
+        ];
         // Again: chunk k now holds lane k of the four.
         let quarters = |x: __m512i, y: __m512i| {
             _mm512_max_epi32(
@@ -352,6 +358,7 @@ impl Lanes {
     /// One greedy step of lanes 0..W; returns the lanes whose walk ended
     /// (reached the goal, or a dead end: their route is left as it was).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lanes are indexed across several arrays
     fn round<const AVX512: bool, const W: usize>(&mut self, p: &Problem, limit: f64) -> u32 {
         let len = p.stride();
         let mut slack = [0.0f32; IN_FLIGHT];
@@ -589,14 +596,20 @@ impl Decoder {
     ) -> (RouteEval, RouteEval) {
         let (a, b) = (&a[..p.n()], &b[..p.n()]);
         let mut result = [RouteEval::default(); 2];
-        self.stream_with(Kernel::detect(), p, 2, &|i| if i == 0 { a } else { b }, &mut |i, r, e| {
-            if i == 0 {
-                *out_a = *r;
-            } else {
-                *out_b = *r;
-            }
-            result[i] = e;
-        });
+        self.stream_with(
+            Kernel::detect(),
+            p,
+            2,
+            &|i| if i == 0 { a } else { b },
+            &mut |i, r, e| {
+                if i == 0 {
+                    *out_a = *r;
+                } else {
+                    *out_b = *r;
+                }
+                result[i] = e;
+            },
+        );
         (result[0], result[1])
     }
 
@@ -826,7 +839,6 @@ fn min_of(len: usize, f: impl Fn(usize) -> f64) -> f64 {
     }
     acc[0]
 }
-
 
 #[cfg(test)]
 mod tests {

@@ -586,12 +586,33 @@ mod tests {
 
     #[test]
     fn f32_rounding_goes_the_named_way() {
-        for x in [0.0, 1.0, 0.1, 31_000.000_1, -0.1, -2.5e-3, 1e300, -1e300, 3.3e-42, -3.3e-42, 1e-50, -1e-50] {
+        for x in [
+            0.0,
+            1.0,
+            0.1,
+            31_000.000_1,
+            -0.1,
+            -2.5e-3,
+            1e300,
+            -1e300,
+            3.3e-42,
+            -3.3e-42,
+            1e-50,
+            -1e-50,
+        ] {
             let (up, down) = (f32_up(x), f32_down(x));
             assert!(f64::from(up) >= x && f64::from(down) <= x, "{x}");
             assert!(f64::from(up.next_down()) < x || up == f32::MIN, "{x}");
             assert!(f64::from(down.next_up()) > x, "{x}");
-            assert_eq!(down, if f64::from(x as f32) > x { (x as f32).next_down() } else { x as f32 }, "{x}");
+            assert_eq!(
+                down,
+                if f64::from(x as f32) > x {
+                    (x as f32).next_down()
+                } else {
+                    x as f32
+                },
+                "{x}"
+            );
         }
         assert_eq!(f32_up(f64::INFINITY), f32::INFINITY);
         assert_eq!(f32_up(2.0), 2.0);

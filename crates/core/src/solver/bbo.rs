@@ -157,7 +157,11 @@ impl Bbo {
     fn evaluate(&mut self, problem: &Problem, ranked: bool, from: usize) {
         let stride = self.stride;
         let habitat = |i: usize| if ranked { self.order[from + i] } else { i };
-        let count = if ranked { self.settings.habitats.saturating_sub(from) } else { self.settings.habitats };
+        let count = if ranked {
+            self.settings.habitats.saturating_sub(from)
+        } else {
+            self.settings.habitats
+        };
         let pop = &self.pop;
         let (eval, rank_key) = (&mut self.eval, &mut self.rank_key);
         let (best, best_eval) = (&mut self.best, &mut self.best_eval);
