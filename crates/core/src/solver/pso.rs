@@ -43,10 +43,14 @@
 //!   range) noise per dimension. The warm route is also evaluated directly,
 //!   so a warm solve never returns anything worse than it.
 //! - **Single precision.** Positions, velocities and bests are `f32`: the
-//!   decoder only compares priorities, `f32` resolves ~1e-5 on this range,
-//!   and twice the SIMD width halves the update's cost. The
-//!   decoder widens `f32` exactly, so results are still exact functions of
-//!   the seed.
+//!   decoder only compares priorities (as `f32`, at 16 bits of fraction),
+//!   and twice the SIMD width halves the update's cost. Results are still
+//!   exact functions of the seed, the same on every SIMD level.
+//! - **Synchronous, streamed decode.** After the whole swarm is updated,
+//!   it is decoded as one stream (`Decoder::decode_stream`, eight walks in
+//!   flight) and each particle's result is taken as its walk finishes:
+//!   personal best, then the best-so-far on strict improvement. The
+//!   finishing order is a function of the positions alone.
 //! - r1 and r2 come from sixteen interleaved xoshiro256++ lanes seeded from the
 //!   caller's `PlannerRng` (see `lanes.rs`), 24 bits each (one 64-bit word
 //!   per dimension).
