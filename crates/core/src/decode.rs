@@ -50,7 +50,7 @@
 //!   step-by-step sum.
 //! - The repair runs, per cut point, an A* search with the look-ahead's
 //!   shortest time home as heuristic, pruned by the time left, so it only
-//!   explores near-quickest paths (`Decoder::repair`).
+//!   explores near-quickest paths (`Repair::repair`).
 //! - Nothing allocates: every buffer is a fixed array in the [`Decoder`].
 
 use crate::problem::{MAX_NODES, Problem, f32_down};
