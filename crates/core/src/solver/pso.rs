@@ -47,10 +47,14 @@
 //!   range) noise per dimension. The warm route is also evaluated directly,
 //!   so a warm solve never returns anything worse than it.
 //! - **Single precision.** Positions, velocities and bests are `f32`: the
-//!   decoder only compares priorities, `f32` resolves ~1e-5 on this range,
-//!   and twice the SIMD width halves the update's cost. The
-//!   decoder widens `f32` exactly, so results are still exact functions of
-//!   the seed.
+//!   decoder only compares priorities (as `f32`, at 16 bits of fraction),
+//!   and twice the SIMD width halves the update's cost. Results are still
+//!   exact functions of the seed, the same on every SIMD level.
+//! - **Synchronous, streamed decode.** After the whole swarm is updated,
+//!   it is decoded as one stream (`Decoder::decode_stream`, eight walks in
+//!   flight) and each particle's result is taken as its walk finishes:
+//!   personal best, then the best-so-far on strict improvement. The
+//!   finishing order is a function of the positions alone.
 //! - r1 and r2 come from sixteen interleaved xoshiro256++ lanes seeded from the
 //!   caller's `PlannerRng` (see `lanes.rs`), 24 bits each (one 64-bit word
 //!   per dimension).
@@ -155,9 +159,8 @@ pub(crate) fn unit24(u: u64) -> f32 {
 /// A PSO solver with every buffer allocated up front.
 pub struct Pso {
     settings: PsoSettings,
-    /// Two decoders, so particles decode in pairs.
+    /// Decodes the swarm as one stream.
     decoder: Decoder,
-    decoder_b: Decoder,
     lanes: LaneRng,
     /// Node count of the current problem and its padded row length.
     n: usize,
@@ -172,9 +175,6 @@ pub struct Pso {
     gbest: Vec<f32>,
     /// Random words for the row being updated (one per dimension).
     bits: Vec<u64>,
-    /// Decoding targets for the particle pair in hand.
-    scratch: Route,
-    scratch_b: Route,
     best: Route,
     best_eval: RouteEval,
     /// Particle whose personal best is `best` (its position is `gbest`).
@@ -195,7 +195,6 @@ impl Pso {
         Self {
             settings,
             decoder: Decoder::new(),
-            decoder_b: Decoder::new(),
             lanes: LaneRng::new(),
             n: 0,
             stride: 0,
@@ -205,8 +204,6 @@ impl Pso {
             pbest_eval: vec![RouteEval::default(); settings.particles],
             gbest: vec![0.0; MAX_NODES],
             bits: vec![0; MAX_NODES],
-            scratch: Route::new(),
-            scratch_b: Route::new(),
             best: Route::new(),
             best_eval: RouteEval::default(),
             best_particle: 0,
@@ -236,52 +233,6 @@ impl Pso {
         (self.settings.velocity_clamp * (PRIORITY_MAX - PRIORITY_MIN)) as f32
     }
 
-    /// Decodes particles `i` and `i + 1` together (see
-    /// [`Decoder::decode_pair`]), then takes their results in order.
-    #[inline(always)]
-    fn evaluate_pair(&mut self, problem: &Problem, i: usize) -> bool {
-        let s = self.stride;
-        let (first, second) = self.x[i * s..(i + 2) * s].split_at(s);
-        let (ea, eb) = self.decoder.decode_pair(
-            &mut self.decoder_b,
-            problem,
-            first,
-            second,
-            &mut self.scratch,
-            &mut self.scratch_b,
-        );
-        let improved = self.take(problem, i, ea, false);
-        self.take(problem, i + 1, eb, true) | improved
-    }
-
-    /// Decodes particle `i` alone.
-    #[inline(always)]
-    fn evaluate(&mut self, problem: &Problem, i: usize) -> bool {
-        let row = i * self.stride..(i + 1) * self.stride;
-        let e = self.decoder.decode(problem, &self.x[row], &mut self.scratch);
-        self.take(problem, i, e, false)
-    }
-
-    /// Updates particle `i`'s personal best with its decoded figures `e`
-    /// (route in `scratch_b` if `second`, else `scratch`) and the
-    /// best-so-far, each on strict improvement.
-    #[inline(always)]
-    fn take(&mut self, problem: &Problem, i: usize, e: RouteEval, second: bool) -> bool {
-        if !problem.better(&e, &self.pbest_eval[i]) {
-            return false;
-        }
-        let row = i * self.stride..(i + 1) * self.stride;
-        self.pbest[row.clone()].copy_from_slice(&self.x[row]);
-        self.pbest_eval[i] = e;
-        if problem.better(&e, &self.best_eval) {
-            self.best = if second { self.scratch_b } else { self.scratch };
-            self.best_eval = e;
-            self.best_particle = i;
-            return true;
-        }
-        false
-    }
-
     /// Lamarckian write-back for the memetic `auto` planner: makes `route`
     /// (figures `e`) the position and personal best of the swarm's best
     /// particle and the swarm's best, encoded by [`warm_vector`] so the
@@ -300,19 +251,36 @@ impl Pso {
         self.refresh_gbest();
     }
 
-    /// Decodes every particle (in pairs) and takes the results in order;
-    /// `true` when the best-so-far improved.
+    /// Decodes the whole swarm as one stream ([`Decoder::decode_stream`])
+    /// and takes each particle's result as its walk finishes: its personal
+    /// best and the best-so-far, each on strict improvement. `true` when the
+    /// best-so-far improved. (The order walks finish in is a function of the
+    /// positions alone, so this stays a function of the seed.)
     fn evaluate_all(&mut self, problem: &Problem) -> bool {
+        let stride = self.stride;
+        let x = &self.x;
+        let (pbest, pbest_eval) = (&mut self.pbest, &mut self.pbest_eval);
+        let (best, best_eval, best_particle) = (&mut self.best, &mut self.best_eval, &mut self.best_particle);
         let mut improved = false;
-        let particles = self.settings.particles;
-        let mut i = 0;
-        while i + 1 < particles {
-            improved |= self.evaluate_pair(problem, i);
-            i += 2;
-        }
-        if i < particles {
-            improved |= self.evaluate(problem, i);
-        }
+        self.decoder.decode_stream(
+            problem,
+            self.settings.particles,
+            &|i| &x[i * stride..(i + 1) * stride],
+            &mut |i, route, e| {
+                if !problem.better(&e, &pbest_eval[i]) {
+                    return;
+                }
+                let row = i * stride..(i + 1) * stride;
+                pbest[row.clone()].copy_from_slice(&x[row]);
+                pbest_eval[i] = e;
+                if problem.better(&e, best_eval) {
+                    *best = *route;
+                    *best_eval = e;
+                    *best_particle = i;
+                    improved = true;
+                }
+            },
+        );
         improved
     }
 
