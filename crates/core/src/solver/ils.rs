@@ -441,6 +441,13 @@ mod tests {
         out
     }
 
+    /// The route start → goal and its figures, when it is feasible.
+    fn direct_route(p: &Problem) -> Option<(Route, RouteEval)> {
+        let r = Route::from_slice(&[p.start(), p.goal()])?;
+        let e = p.evaluate(&r)?;
+        e.feasible.then_some((r, e))
+    }
+
     #[test]
     fn moves_keep_routes_valid_feasible_and_their_figures_exact() {
         let mut m = Moves::new();
@@ -449,15 +456,9 @@ mod tests {
         for p in problems() {
             let v = Value::of(&p);
             m.set_objective(&p);
-            let Some(mut r) = Route::from_slice(&[p.start(), p.goal()]) else {
+            let Some((mut r, mut e)) = direct_route(&p) else {
                 continue;
             };
-            let Some(mut e) = p.evaluate(&r) else {
-                continue;
-            };
-            if !e.feasible {
-                continue;
-            }
             for round in 0..20 {
                 let before = e;
                 filled += m.fill(&p, &mut r, &mut e, NodeSet::EMPTY, 0.3, &mut rng);
@@ -490,15 +491,9 @@ mod tests {
         for p in problems() {
             let v = Value::of(&p);
             m.set_objective(&p);
-            let Some(mut r) = Route::from_slice(&[p.start(), p.goal()]) else {
+            let Some((mut r, mut e)) = direct_route(&p) else {
                 continue;
             };
-            let Some(mut e) = p.evaluate(&r) else {
-                continue;
-            };
-            if !e.feasible {
-                continue;
-            }
             m.fill(&p, &mut r, &mut e, NodeSet::EMPTY, 0.5, &mut rng);
             m.shorten(&p, &mut r, &mut e, 100_000, 3);
             let ids = r.to_vec();
