@@ -1,5 +1,6 @@
 //! Criterion benches for the planner's hot paths: decoding one
-//! priority vector, and a full paper budget of PSO (150 particles × 150
+//! priority vector, decoding a swarm of 150 as one stream (per vector), and
+//! a full paper budget of PSO (150 particles × 150
 //! iterations) and BBO (50 habitats × 150 generations), at n = 40, 80, 128.
 //!
 //! Networks: the scenario generator's paper-model networks on the embedded
@@ -73,6 +74,43 @@ fn decode<M: Measurement>(c: &mut Criterion<M>, name: &str) {
     g.finish();
 }
 
+/// The decode as the solvers run it: a swarm of 150 `f32` vectors decoded
+/// as one stream (`Decoder::decode_stream`, eight walks in flight); the
+/// figure is per vector (criterion's throughput, or the time / 150).
+fn decode_stream<M: Measurement>(c: &mut Criterion<M>, name: &str) {
+    const SWARM: usize = 150;
+    let mut g = c.benchmark_group(name);
+    g.throughput(Throughput::Elements(SWARM as u64));
+    for n in SIZES {
+        let ps = problems(n);
+        let mut rng = PlannerRng::new(7);
+        let pools: Vec<Vec<f32>> = (0..4)
+            .map(|_| {
+                (0..SWARM * MAX_NODES)
+                    .map(|_| rng.uniform(PRIORITY_MIN, PRIORITY_MAX) as f32)
+                    .collect()
+            })
+            .collect();
+        let mut d = Decoder::new();
+        let mut k = 0usize;
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                k = k.wrapping_add(1);
+                let pool = &pools[k % 4];
+                let mut weight = 0.0;
+                d.decode_stream(
+                    &ps[(k / 16) % NETWORKS],
+                    SWARM,
+                    &|i| &pool[i * MAX_NODES..(i + 1) * MAX_NODES],
+                    &mut |_, _, e| weight += e.weight,
+                );
+                black_box(weight)
+            })
+        });
+    }
+    g.finish();
+}
+
 fn full_budget<S: Solver, M: Measurement>(c: &mut Criterion<M>, name: &str, iterations: u32, mut solver: S) {
     let mut g = c.benchmark_group(name);
     for n in SIZES {
@@ -108,6 +146,7 @@ fn bbo<M: Measurement>(c: &mut Criterion<M>, name: &str) {
 
 fn wall(c: &mut Criterion) {
     decode(c, "decode");
+    decode_stream(c, "decode_stream");
     pso(c, "pso_full_budget");
     bbo(c, "bbo_full_budget");
 }
@@ -185,6 +224,7 @@ impl Measurement for ThreadCpuTime {
 #[cfg(target_os = "linux")]
 fn cpu(c: &mut Criterion<ThreadCpuTime>) {
     decode(c, "cpu_decode");
+    decode_stream(c, "cpu_decode_stream");
     pso(c, "cpu_pso_full_budget");
     bbo(c, "cpu_bbo_full_budget");
 }

@@ -5,7 +5,9 @@
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use auv_system::{binary, journal_totals, leftovers, prefix, read_json, run, temp_dir, wait_with_watchdog};
+use auv_system::{
+    assert_report_matches_journal, binary, leftovers, prefix, read_json, run, temp_dir, wait_with_watchdog,
+};
 
 const LIMIT: Duration = Duration::from_secs(240);
 
@@ -19,20 +21,6 @@ fn shared() -> std::sync::RwLockReadGuard<'static, ()> {
 
 /// A finished mission: its report, its log's bytes, its iceoryx2 prefix.
 type Finished = (serde_json::Value, Vec<u8>, String);
-
-/// The report's tasks, weight and route are the journal's.
-fn assert_report_matches_journal(r: &serde_json::Value, out: &std::path::Path) {
-    let (tasks, weight, route) = journal_totals(&out.join("journal.jsonl"));
-    assert_eq!(r["tasks_completed"].as_u64(), Some(tasks), "{r:#}");
-    assert_eq!(r["weight"].as_f64(), Some(weight), "{r:#}");
-    let reported: Vec<u64> = r["route"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|v| v.as_u64())
-        .collect();
-    assert_eq!(reported, route, "{r:#}");
-}
 
 /// Runs a lockstep mission; `Err((exit code, stderr))` when it fails.
 fn try_lockstep_mission(

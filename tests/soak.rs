@@ -78,9 +78,7 @@ fn a_short_soak_with_faults_completes_every_mission_and_leaks_nothing() {
     }
     let s = &v["rss_kb"]["supervisor"];
     assert!(
-        // mission.mcap is built in memory at each mission's end (a few
-        // MB of JSON); the allocator keeps those arenas, hence the margin.
-        s["end"].as_u64().unwrap() <= s["after_first"].as_u64().unwrap() + 32 * 1024,
+        s["end"].as_u64().unwrap() <= s["after_first"].as_u64().unwrap() + 8 * 1024,
         "{v:#}"
     );
     // The host's steal time, over the soak and per mission (Linux).

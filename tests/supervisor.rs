@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use auv_system::{binary, journal_totals, leftovers, prefix, read_json, temp_dir, wait_with_watchdog};
+use auv_system::{assert_report_matches_journal, binary, leftovers, prefix, read_json, temp_dir, wait_with_watchdog};
 
 /// Watchdog of one mission (not a timing assertion).
 const LIMIT: Duration = Duration::from_secs(240);
@@ -76,16 +76,7 @@ fn sigkill(pid: u64) {
 /// The report's tasks, weight and route are the journal's; nothing the
 /// vehicle announced is missing from it; nothing leaked.
 fn assert_report_adds_up(r: &serde_json::Value, out: &Path, p: &str) {
-    let (tasks, weight, route) = journal_totals(&out.join("journal.jsonl"));
-    assert_eq!(r["tasks_completed"].as_u64(), Some(tasks), "{r:#}");
-    assert_eq!(r["weight"].as_f64(), Some(weight), "{r:#}");
-    let reported: Vec<u64> = r["route"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|v| v.as_u64())
-        .collect();
-    assert_eq!(reported, route, "{r:#}");
+    assert_report_matches_journal(r, out);
     assert_eq!(r["journal_check"]["lost_events"], 0, "{r:#}");
     assert_eq!(r["shm_files_left"], 0, "{r:#}");
     assert!(leftovers(p).is_empty(), "{:?}", leftovers(p));
@@ -127,6 +118,50 @@ fn a_sensor_killed_from_outside_is_restarted_and_the_mission_reaches_the_goal() 
 #[test]
 fn a_vehicle_killed_from_outside_resumes_from_its_journal_and_reaches_the_goal() {
     killed_from_outside_the_mission_reaches_the_goal("vehicle-sim");
+}
+
+/// The same in a `--lockstep` mission (the default mission: long enough
+/// for the kill to land mid-run), where the vehicle waits for every answer:
+/// the restarted process picks up where the dead one was.
+fn killed_in_lockstep_the_mission_reaches_the_goal(name: &str) {
+    let _alone = alone();
+    let out = temp_dir("l");
+    let p = prefix("l");
+    let child = Command::new(binary("planner"))
+        .args(["mission", "--quiet", "--lockstep", "--seed", "2", "--ipc-prefix", &p])
+        .arg("--out")
+        .arg(&out)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start the mission");
+    let pid = running_pid(&out, name, None);
+    sigkill(pid);
+    let o = wait_with_watchdog(child, LIMIT);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_json(&out.join("report.json"));
+    assert_eq!(r["outcome"], "goal_reached", "{r:#}");
+    assert_eq!(r["lockstep"], true, "{r:#}");
+    let s = &r["supervision"];
+    assert_eq!(s["restarts"][name]["external"], 1, "{s:#}");
+    assert_eq!(s["restarts_total"]["injected"], 0, "{s:#}");
+    assert_report_adds_up(&r, &out, &p);
+}
+
+#[test]
+fn in_lockstep_a_killed_planner_is_restarted_and_the_mission_reaches_the_goal() {
+    killed_in_lockstep_the_mission_reaches_the_goal("planner");
+}
+
+#[test]
+fn in_lockstep_a_killed_sensor_is_restarted_and_the_mission_reaches_the_goal() {
+    killed_in_lockstep_the_mission_reaches_the_goal("sensor-sim");
+}
+
+#[test]
+fn in_lockstep_a_killed_vehicle_resumes_and_the_mission_reaches_the_goal() {
+    killed_in_lockstep_the_mission_reaches_the_goal("vehicle-sim");
 }
 
 #[test]

@@ -188,37 +188,61 @@ const WATER: RGBColor = RGBColor(214, 232, 246);
 
 /// Writes the network map to `path` (SVG).
 pub fn map_figure(path: &Path, fig: &MapFigure<'_>) -> Result<(), PlotError> {
-    let (w, h) = (fig.map.width_m(), fig.map.height_m());
+    map_panels(path, None, std::slice::from_ref(fig))
+}
+
+/// Writes maps side by side into one SVG (e.g. one per algorithm), under a
+/// common `title` if given. Each map keeps its chart's aspect ratio.
+pub fn map_panels(path: &Path, title: Option<&str>, figs: &[MapFigure<'_>]) -> Result<(), PlotError> {
+    let Some(first) = figs.first() else {
+        return Err(PlotError::Empty(path.display().to_string()));
+    };
+    let (w, h) = (first.map.width_m(), first.map.height_m());
     if !(w > 0.0 && h > 0.0) {
         return Err(PlotError::Empty(path.display().to_string()));
     }
     // Keep the chart's aspect ratio: the longer side gets 900 px.
     let scale = 900.0 / w.max(h);
-    let size = ((w * scale) as u32 + 110, (h * scale) as u32 + 90);
+    let panel = ((w * scale) as u32 + 110, (h * scale) as u32 + 90);
+    let top = if title.is_some() { 40 } else { 0 };
+    let size = (panel.0 * figs.len() as u32, panel.1 + top);
     register_font();
     let root = SVGBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
-    let mut chart = ChartBuilder::on(&root)
+    let root = match title {
+        Some(t) => root.titled(t, ("sans-serif", 22)).map_err(|e| draw_err(path, e))?,
+        None => root,
+    };
+    for (area, fig) in root.split_evenly((1, figs.len())).iter().zip(figs) {
+        draw_map(area, fig).map_err(|e| draw_err(path, e))?;
+    }
+    root.present().map_err(|e| draw_err(path, e))
+}
+
+/// Draws one network map into `area`.
+fn draw_map(area: &DrawingArea<SVGBackend<'_>, Shift>, fig: &MapFigure<'_>) -> Result<(), String> {
+    let (w, h) = (fig.map.width_m(), fig.map.height_m());
+    let mut chart = ChartBuilder::on(area)
         .caption(fig.title, ("sans-serif", 20))
         .margin(10)
         .margin_right(40)
         .x_label_area_size(36)
         .y_label_area_size(60)
         .build_cartesian_2d(0.0..w, 0.0..h)
-        .map_err(|e| draw_err(path, e))?;
+        .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .disable_mesh()
         .x_desc("x east (m)")
         .y_desc("y north (m)")
         .draw()
-        .map_err(|e| draw_err(path, e))?;
-    chart.plotting_area().fill(&WATER).map_err(|e| draw_err(path, e))?;
+        .map_err(|e| e.to_string())?;
+    chart.plotting_area().fill(&WATER).map_err(|e| e.to_string())?;
     let cell = w.max(h) / 250.0;
     let land = land_cells(fig.map, 250)
         .into_iter()
         .map(|r| Rectangle::new(r, LAND.filled()));
-    chart.draw_series(land).map_err(|e| draw_err(path, e))?;
+    chart.draw_series(land).map_err(|e| e.to_string())?;
 
     let grey = RGBColor(90, 90, 90);
     chart
@@ -231,7 +255,7 @@ pub fn map_figure(path: &Path, fig: &MapFigure<'_>) -> Result<(), PlotError> {
                 .collect();
             PathElement::new(pts, grey.stroke_width(1))
         }))
-        .map_err(|e| draw_err(path, e))?
+        .map_err(|e| e.to_string())?
         .label("dynamic bound")
         .legend(move |(x, y)| Circle::new((x + 10, y), 5, grey.stroke_width(1)));
 
@@ -248,7 +272,7 @@ pub fn map_figure(path: &Path, fig: &MapFigure<'_>) -> Result<(), PlotError> {
         };
         chart
             .draw_series(series)
-            .map_err(|e| draw_err(path, e))?
+            .map_err(|e| e.to_string())?
             .label(route.label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
     }
@@ -261,14 +285,14 @@ pub fn map_figure(path: &Path, fig: &MapFigure<'_>) -> Result<(), PlotError> {
                 .filter(|&(i, _)| i != fig.start && i != fig.goal)
                 .map(|(_, &p)| Circle::new(p, 3, BLACK.filled())),
         )
-        .map_err(|e| draw_err(path, e))?
+        .map_err(|e| e.to_string())?
         .label("waypoint")
         .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
     if !fig.markers.is_empty() {
         let orange = PALETTE[4];
         chart
             .draw_series(fig.markers.iter().map(|&p| TriangleMarker::new(p, 6, orange.filled())))
-            .map_err(|e| draw_err(path, e))?
+            .map_err(|e| e.to_string())?
             .label(fig.marker_label)
             .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 6, orange.filled()));
     }
@@ -279,19 +303,18 @@ pub fn map_figure(path: &Path, fig: &MapFigure<'_>) -> Result<(), PlotError> {
                     [(p.0 - cell, p.1 - cell), (p.0 + cell, p.1 + cell)],
                     colour.filled(),
                 )])
-                .map_err(|e| draw_err(path, e))?
+                .map_err(|e| e.to_string())?
                 .label(label)
                 .legend(move |(x, y)| Rectangle::new([(x + 5, y - 5), (x + 15, y + 5)], colour.filled()));
         }
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(SeriesLabelPosition::LowerLeft)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()
-        .map_err(|e| draw_err(path, e))?;
-    root.present().map_err(|e| draw_err(path, e))
+        .map_err(|e| e.to_string())
 }
 
 /// Land as run-length rectangles ([(x0, y0), (x1, y1)], m) on a grid of

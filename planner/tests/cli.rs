@@ -869,15 +869,29 @@ fn montecarlo_writes_the_table_csv_and_figures_deterministically() {
         "fig5-time-distance.svg",
         "fig6-tasks-weight.svg",
         "fig7-violation.svg",
-        "fig8-network.svg",
+        "fig8-replan.svg",
     ] {
         assert!(a.join(f).is_file(), "{f} not written");
+    }
+    for needle in [
+        "edges_changed (re-plan)",
+        "edges_changed (cold re-plan)",
+        "warm_start (rate)",
+    ] {
+        assert!(table.contains(needle), "{needle} missing from\n{table}");
+    }
+    let fig8 = std::fs::read_to_string(a.join("fig8-replan.svg")).unwrap();
+    for needle in ["pso: ", "bbo: ", "edges changed by the re-plan", "before the change"] {
+        assert!(fig8.contains(needle), "{needle} missing from fig8-replan.svg");
     }
     let csv = std::fs::read_to_string(a.join("runs.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("run,algorithm,seed,cost,cpu_ms,route_time_s,distance_m,tasks,weight,violation_s,feasible")
+        Some(
+            "run,algorithm,seed,cost,cpu_ms,route_time_s,distance_m,tasks,weight,violation_s,feasible,\
+             edges_changed,edges_changed_cold,replan_weight,replan_weight_cold,replan_feasible,warm_start"
+        )
     );
     assert_eq!(lines.count(), 6, "3 runs x 2 algorithms");
     // Same seed, same rows (the CPU time column aside).
@@ -1236,8 +1250,115 @@ fn montecarlo_includes_auto_next_to_pso_and_bbo() {
     let algorithms: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').nth(1).unwrap()).collect();
     assert_eq!(algorithms, ["pso", "bbo", "auto", "pso", "bbo", "auto"]);
     for row in csv.lines().skip(1) {
-        assert!(row.ends_with(",true"), "infeasible: {row}");
+        let cols: Vec<&str> = row.split(',').collect();
+        assert_eq!(cols[10], "true", "infeasible plan: {row}");
+        assert_eq!(cols[15], "true", "infeasible re-plan: {row}");
     }
+}
+
+#[test]
+fn montecarlo_knobs_change_one_thing_each_and_bad_values_are_refused() {
+    let dir = scratch("montecarlo-knobs");
+    let run = |name: &str, extra: &[&str]| {
+        let out_dir = dir.join(name);
+        let mut args = vec![
+            "montecarlo",
+            "--runs",
+            "2",
+            "--nodes",
+            "12",
+            "--threads",
+            "1",
+            "--iterations",
+            "5",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", path_str(&out_dir)]);
+        let out = planner(&args);
+        (out, out_dir)
+    };
+    let rows = |d: &Path| -> Vec<String> {
+        std::fs::read_to_string(d.join("runs.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let mut cols: Vec<&str> = l.split(',').collect();
+                cols.remove(4);
+                cols.join(",")
+            })
+            .collect()
+    };
+    let (base, base_dir) = run("base", &[]);
+    assert_ok(&base);
+    let (free, free_dir) = run(
+        "free",
+        &[
+            "--pso-walls",
+            "free",
+            "--pso-velocity-clamp",
+            "none",
+            "--pso-particles",
+            "30",
+        ],
+    );
+    assert_ok(&free);
+    let text = stdout(&free);
+    assert!(
+        text.contains("pso 30 particles x 5 iterations, velocity clamp inf, walls Free"),
+        "{text}"
+    );
+    let (b, f) = (rows(&base_dir), rows(&free_dir));
+    // Only PSO's rows move; BBO's are the same solves.
+    assert_ne!(b[0], f[0]);
+    assert_eq!(b[1], f[1]);
+    let (thin, _) = run(
+        "thin",
+        &[
+            "--edge-density",
+            "0.6",
+            "--objective",
+            "paper-cost",
+            "--phi1",
+            "0.0001",
+            "--bbo-generations",
+            "3",
+            "--budget-s",
+            "20000",
+        ],
+    );
+    assert_ok(&thin);
+    let text = stdout(&thin);
+    for needle in [
+        "paper_cost (phi1 0.0001, phi2 1)",
+        "budget 20000 s",
+        "edge density 0.6",
+        "x 3 generations",
+    ] {
+        assert!(text.contains(needle), "{needle} missing from\n{text}");
+    }
+    let bad = dir.join("bad");
+    let o = path_str(&bad);
+    assert_usage_error(
+        &planner(&["montecarlo", "--edge-density", "0", "--out", o]),
+        &["--edge-density"],
+    );
+    assert_usage_error(
+        &planner(&["montecarlo", "--pso-velocity-clamp", "0", "--out", o]),
+        &["--pso-velocity-clamp"],
+    );
+    assert_usage_error(
+        &planner(&["montecarlo", "--pso-walls", "bounce", "--out", o]),
+        &["bounce"],
+    );
+    assert_usage_error(
+        &planner(&["montecarlo", "--bbo-mutation", "2", "--out", o]),
+        &["--bbo-mutation"],
+    );
+    assert_usage_error(
+        &planner(&["montecarlo", "--bbo-elites", "50", "--out", o]),
+        &["--bbo-elites 50"],
+    );
 }
 
 #[test]

@@ -26,11 +26,10 @@ use std::time::Duration;
 
 use auv_messages::msg::{Outcome, VehicleState, WaypointSnapshot};
 use auv_messages::network::write_snapshot;
-use auv_messages::wire::{
-    Fault, FaultCycle, FaultListError, SENSOR_FAULTS, WireRules, corrupt_snapshot, tamper_header,
-};
+use auv_messages::wire::{Fault, FaultCycle, FaultListError, SENSOR_FAULTS, WireRules, corrupt_snapshot};
 use auv_platform::clock::mono_now_ns;
 use auv_platform::signal;
+use auv_transport::faulty::{Corrupt, FaultyOutbox};
 use auv_transport::guard::Guarded;
 use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use auv_transport::{IpcArgs, Outbox, Role, Wake, Waker};
@@ -103,13 +102,25 @@ impl VehicleClock {
     }
 }
 
-fn publish(
-    out: &mut IpcOutbox<Shm, WaypointSnapshot>,
-    world: &MissionWorld,
-    epoch: u64,
+/// The outbox of snapshots: bad ones next to the good under `--inject`.
+type SnapshotOut = FaultyOutbox<IpcOutbox<Shm, WaypointSnapshot>, BadSnapshot>;
+
+/// Makes an injected snapshot bad (see [`corrupt_snapshot`]).
+struct BadSnapshot {
+    rules: Arc<WireRules>,
     period_s: f64,
-    fault: Option<(Fault, &WireRules)>,
-) -> Result<(), Error> {
+}
+
+impl Corrupt<WaypointSnapshot> for BadSnapshot {
+    fn corrupt(&mut self, fault: Fault, m: &mut WaypointSnapshot) {
+        // The good snapshot's epoch, from its mission time (epoch × period).
+        let epoch = (m.header.mission_time_s / self.period_s).round().max(0.0) as u64;
+        corrupt_snapshot(fault, m, &self.rules, epoch);
+    }
+}
+
+/// Publishes the snapshot of `epoch`; `alone`: without a bad twin.
+fn publish(out: &mut SnapshotOut, world: &MissionWorld, epoch: u64, period_s: f64, alone: bool) -> Result<(), Error> {
     let inst = world.snapshot();
     let mut res = Ok(());
     let mut good = |m: &mut WaypointSnapshot| {
@@ -119,30 +130,16 @@ fn publish(
         m.header.mission_time_s = epoch as f64 * period_s;
         m.next_update_s = (epoch + 1) as f64 * period_s;
     };
-    match fault {
-        None => {
-            out.publish(&mut good)?;
-        }
-        Some((f, _)) if f.after_good() => {
-            let seq = out.publish(&mut good)?;
-            out.publish_tampered(&mut good, &mut |m| tamper_header(f, &mut m.header, seq))?;
-        }
-        Some((f, _)) if f.in_header() => {
-            out.publish_tampered(&mut good, &mut |m| tamper_header(f, &mut m.header, 0))?;
-            out.publish(&mut good)?;
-        }
-        Some((f, rules)) => {
-            out.publish_tampered(&mut good, &mut |m| {
-                corrupt_snapshot(f, m, rules, epoch);
-            })?;
-            out.publish(&mut good)?;
-        }
+    if alone {
+        out.publish_alone(&mut good)?;
+    } else {
+        out.publish(&mut good)?;
     }
     Ok(res?)
 }
 
 fn run(args: &Args) -> Result<Outcome, Error> {
-    let mut faults = FaultCycle::parse_opt("--inject", args.inject.as_deref(), &SENSOR_FAULTS)?;
+    let faults = FaultCycle::parse_opt("--inject", args.inject.as_deref(), &SENSOR_FAULTS)?;
     signal::install();
     let mut world = load_world(&args.scenario)?;
     let period = args.sensor_period_s.unwrap_or(world.sensor_period_s());
@@ -156,7 +153,11 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     }
     let opts = args.ipc.options()?;
     let ctx = IpcContext::<Shm>::new(&opts, "sensor-sim")?;
-    let mut out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fingerprint))?;
+    let bad = BadSnapshot {
+        rules: rules.clone(),
+        period_s: period,
+    };
+    let mut out = FaultyOutbox::new(ctx.outbox::<WaypointSnapshot>(Stamp::new(fingerprint))?, faults, bad);
     let mut states =
         Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "sensor-sim").with_check(rules.state_check());
     let mut waker = ctx.waker(Role::Sensor)?;
@@ -171,8 +172,6 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         &mut states,
         &mut waker,
         period,
-        &rules,
-        &mut faults,
         args.resume_wait_s,
     );
     let r = states.rejected();
@@ -188,12 +187,10 @@ fn run(args: &Args) -> Result<Outcome, Error> {
 #[allow(clippy::too_many_arguments)]
 fn serve(
     world: &mut MissionWorld,
-    out: &mut IpcOutbox<Shm, WaypointSnapshot>,
+    out: &mut SnapshotOut,
     states: &mut Guarded<VehicleState, IpcInbox<Shm, VehicleState>>,
     waker: &mut IpcWaker<Shm>,
     period: f64,
-    rules: &WireRules,
-    faults: &mut FaultCycle,
     resume_wait_s: Option<f64>,
 ) -> Result<Outcome, Error> {
     let mut epoch = 0u64;
@@ -224,7 +221,7 @@ fn serve(
     }
     // The first snapshot always goes out clean: a receiver that joins late
     // gets only the latest sample, and it must be a good one to start on.
-    publish(out, world, epoch, period, None)?;
+    publish(out, world, epoch, period, true)?;
     loop {
         states.drain(&mut |s| {
             clock = Some(VehicleClock {
@@ -244,8 +241,7 @@ fn serve(
         while t >= (epoch + 1) as f64 * period {
             epoch += 1;
             world.redraw(epoch);
-            let fault = faults.advance().map(|f| (f, rules));
-            publish(out, world, epoch, period, fault)?;
+            publish(out, world, epoch, period, false)?;
         }
         let wait = match clock {
             Some(c) if c.time_scale > 0.0 => {

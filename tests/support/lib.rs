@@ -143,3 +143,18 @@ pub fn journal_totals(path: &Path) -> (u64, f64, Vec<u64>) {
     }
     (tasks, weight, route)
 }
+
+/// Asserts that the report's tasks, weight and route are the journal's
+/// (the mission's `out` folder), as [`journal_totals`] reads it.
+pub fn assert_report_matches_journal(r: &serde_json::Value, out: &Path) {
+    let (tasks, weight, route) = journal_totals(&out.join("journal.jsonl"));
+    assert_eq!(r["tasks_completed"].as_u64(), Some(tasks), "{r:#}");
+    assert_eq!(r["weight"].as_f64(), Some(weight), "{r:#}");
+    let reported: Vec<u64> = r["route"]
+        .as_array()
+        .expect("the report's route")
+        .iter()
+        .filter_map(|v| v.as_u64())
+        .collect();
+    assert_eq!(reported, route, "{r:#}");
+}

@@ -28,9 +28,10 @@ use std::time::{Duration, Instant};
 
 use auv_messages::journal::{Journal, JournalEvent, JournalSummary, Resume};
 use auv_messages::msg::{Outcome, Plan, PlannerStatus, RejectCounters, VehicleEvent, VehicleState, WaypointSnapshot};
-use auv_messages::wire::{FaultCycle, VEHICLE_FAULTS, WireRules, corrupt_state, tamper_header};
+use auv_messages::wire::{Fault, FaultCycle, VEHICLE_FAULTS, WireRules, corrupt_state};
 use auv_platform::clock::mono_now_ns;
 use auv_platform::signal;
+use auv_transport::faulty::{Corrupt, FaultyOutbox};
 use auv_transport::guard::Guarded;
 use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
 use auv_transport::{IpcArgs, Outbox, Role, Wake, Waker};
@@ -93,9 +94,22 @@ enum Error {
 
 type S = Shm;
 
+/// Makes an injected state bad (see [`corrupt_state`]).
+struct BadState {
+    /// Waypoints in the network (for out-of-range ids).
+    n: usize,
+}
+
+impl Corrupt<VehicleState> for BadState {
+    fn corrupt(&mut self, fault: Fault, m: &mut VehicleState) {
+        corrupt_state(fault, m, self.n);
+    }
+}
+
 struct Ports {
     waker: IpcWaker<S>,
-    state: IpcOutbox<S, VehicleState>,
+    /// Bad states next to the good under `--inject`.
+    state: FaultyOutbox<IpcOutbox<S, VehicleState>, BadState>,
     snapshots: Guarded<WaypointSnapshot, IpcInbox<S, WaypointSnapshot>>,
     plans: Guarded<Plan, IpcInbox<S, Plan>>,
     status: Guarded<PlannerStatus, IpcInbox<S, PlannerStatus>>,
@@ -115,9 +129,6 @@ struct Vehicle {
     answered: Answered,
     time_scale: f64,
     journal: Option<Journal>,
-    faults: FaultCycle,
-    /// Waypoints in the network (for injected out-of-range ids).
-    n: usize,
     /// A safe hold is under way.
     holding: bool,
 }
@@ -223,32 +234,16 @@ impl Vehicle {
     /// number. With `--inject`, a bad copy goes out next to it (never next
     /// to the first or the last state).
     fn publish(&mut self, event: VehicleEvent, needs_answer: bool) -> Result<u64, Error> {
-        let inject = !matches!(event, VehicleEvent::Start | VehicleEvent::Finished);
-        let fault = if inject { self.faults.advance() } else { None };
         let rejected = self.rejected();
-        let (sim, scale, n) = (&self.sim, self.time_scale, self.n);
+        let (sim, scale) = (&self.sim, self.time_scale);
         let mut good = |m: &mut VehicleState| {
             sim.fill_state(event, scale, needs_answer, m);
             m.rejected = rejected.0;
         };
         let out = &mut self.ports.state;
-        let seq = match fault {
-            None => out.publish(&mut good)?,
-            Some(f) if f.after_good() => {
-                let seq = out.publish(&mut good)?;
-                out.publish_tampered(&mut good, &mut |m| tamper_header(f, &mut m.header, seq))?;
-                seq
-            }
-            Some(f) if f.in_header() => {
-                out.publish_tampered(&mut good, &mut |m| tamper_header(f, &mut m.header, 0))?;
-                out.publish(&mut good)?
-            }
-            Some(f) => {
-                out.publish_tampered(&mut good, &mut |m| {
-                    corrupt_state(f, m, n);
-                })?;
-                out.publish(&mut good)?
-            }
+        let seq = match event {
+            VehicleEvent::Start | VehicleEvent::Finished => out.publish_alone(&mut good)?,
+            _ => out.publish(&mut good)?,
         };
         Ok(seq)
     }
@@ -406,7 +401,7 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     let stamp = Stamp::new(fingerprint);
     let ports = Ports {
         waker: ctx.waker(Role::Vehicle)?,
-        state: ctx.outbox::<VehicleState>(stamp)?,
+        state: FaultyOutbox::new(ctx.outbox::<VehicleState>(stamp)?, faults, BadState { n: rules.n() }),
         snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "vehicle-sim")
             .with_check(rules.snapshot_check()),
         plans: Guarded::new(ctx.inbox::<Plan>()?, fingerprint, "vehicle-sim"),
@@ -429,8 +424,6 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         answered: Answered::default(),
         time_scale: if args.lockstep { 0.0 } else { args.time_scale },
         journal,
-        faults,
-        n: rules.n(),
         holding: false,
     };
     // The mission clock starts with the first snapshot.

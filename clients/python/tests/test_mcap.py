@@ -58,8 +58,9 @@ def test_every_message_validates_against_foxglove_schemas(runs):
         else:
             assert schema.startswith("auv."), schema
         counted[schema] = counted.get(schema, 0) + 1
+    # The default chart has a geographic origin: fixes and GeoJSON too.
     for needed in ("foxglove.Grid", "foxglove.SceneUpdate", "foxglove.PoseInFrame", "foxglove.Log",
-                   "auv.PlannerStatus", "auv.MissionProgress"):
+                   "foxglove.LocationFix", "foxglove.GeoJSON", "auv.PlannerStatus", "auv.MissionProgress"):
         assert counted.get(needed, 0) > 0, (needed, counted)
     # A lockstep run leaves the wall-clock latency out.
     assert "auv.PlannerLatency" not in counted
@@ -122,6 +123,7 @@ def test_replay_summarises_the_file_and_rejects_a_truncated_one(runs, tmp_path):
     report = json.load(open(os.path.join(runs[0], "report.json")))
     assert "outcome: %s" % report["outcome"] in r.stdout, r.stdout
     assert "/auv1/vehicle/pose" in r.stdout
+    assert "foxglove.LocationFix" in r.stdout and "foxglove.GeoJSON" in r.stdout
     data = open(path, "rb").read()
     for cut in (len(data) // 2, len(data) - 10, 5):
         bad = tmp_path / ("cut-%d.mcap" % cut)
@@ -129,3 +131,26 @@ def test_replay_summarises_the_file_and_rejects_a_truncated_one(runs, tmp_path):
         r = subprocess.run([planner(), "replay", str(bad)], capture_output=True, text=True, timeout=120)
         assert r.returncode == 2, (cut, r.stdout, r.stderr)
         assert r.stderr.startswith("planner: error: ") and r.stderr.count("\n") == 1, r.stderr
+
+
+def test_location_fixes_follow_the_poses_and_the_geojson_is_the_route(runs):
+    out = runs[0]
+    msgs = read_mcap(os.path.join(out, "mission.mcap"))
+    poses = [(t, d["pose"]["position"]) for topic, _, _, _, t, d in msgs if topic == "/auv1/vehicle/pose"]
+    fixes = [(t, d) for topic, _, _, _, t, d in msgs if topic == "/auv1/vehicle/fix"]
+    assert len(fixes) == len(poses) > 0
+    # The chart's origin (48.990 N, 58.170 W) is its south-west corner: every
+    # fix lies north-east of it, within the chart's few kilometres, and
+    # moves the way its pose does (1 degree of latitude is about 111 km).
+    for (tp, p), (tf, f) in zip(poses, fixes):
+        assert tp == tf
+        assert 48.990 <= f["latitude"] < 49.2 and -58.170 <= f["longitude"] < -57.9, f
+        assert abs((f["latitude"] - 48.990) * 111_200 - p["y"]) < 0.01 * max(1.0, p["y"]) + 50, (p, f)
+    route = [d for topic, _, _, _, _, d in msgs if topic == "/auv1/vehicle/route_geojson"]
+    assert len(route) == 1
+    with open(os.path.join(out, "route.geojson"), encoding="utf-8") as f:
+        assert json.loads(route[0]["geojson"]) == json.load(f)
+    chart = [json.loads(d["geojson"]) for topic, _, _, _, _, d in msgs if topic == "/auv1/chart/geojson"]
+    assert len(chart) == 1 and chart[0]["type"] == "FeatureCollection"
+    points = [f for f in chart[0]["features"] if f["geometry"]["type"] == "Point"]
+    assert len(points) == 40, "the default mission's waypoints"

@@ -13,64 +13,67 @@
 //! still fits, and that path is appended. If no route fits the budget at all,
 //! the result is the quickest path (reported infeasible).
 //!
-//! Ordering details: NaN counts as −∞; priorities are compared at 43 bits of
-//! mantissa (values closer than about 1e-13 relative tie); ties go to the
-//! lower node id.
+//! Arithmetic (single precision where it only steers, double where it
+//! decides feasibility):
+//! - Priorities are compared as `f32` (an `f64` priority is rounded to the
+//!   nearest `f32` first) at 16 bits of fraction: values closer than about
+//!   2^-16 ≈ 1.5e-5 relative tie, and ties go to the lower node id; NaN
+//!   counts as −∞.
+//! - The look-ahead test is `reach ≤ slack` in `f32`, with the look-ahead
+//!   rounded up and the time left rounded down ([`f32_up`], [`f32_down`]),
+//!   so a step the `f32` test lets through also fits in exact `f64`: it
+//!   never lets a route slip over the budget. Where the rounding refuses a
+//!   step that `f64` would just allow (within about 1e-7 relative of the
+//!   budget) the walk may stop short, and the repair (all `f64`) finishes
+//!   it. The route's time, feasibility and other figures are `f64` sums.
 //!
 //! How it is fast:
-//! - Each priority is packed once per decode into a positive `f64` *key*
-//!   whose order is the priority order and whose lowest 7 bits hold the node
-//!   id ([`pack_key`]). Choosing the next node is one branch-free max over
-//!   `key where reach ≤ slack and unvisited, else 0` across the padded row
-//!   (the look-ahead table of [`Problem`] already carries edge time plus
-//!   shortest time home, +∞ for non-edges), and the winner's id is read back
-//!   from its bits.
-//! - That scan is compiled three times (AVX-512 with intrinsics and the
-//!   visited set as a bit mask in the compare mask; AVX2 and baseline with
-//!   visited keys zeroed) and picked at run time. All three compute exactly
-//!   the same max, so routes do not depend on the machine (tests hold them
-//!   equal).
-//! - The AVX-512 walk skips the look-ahead row whenever the time left
-//!   covers the row's largest look-ahead ([`Problem::reach_max_s`]): every
-//!   neighbour fits, so the pick is the largest key among the unvisited
-//!   neighbours, a scan of keys under the adjacency bit mask. On the chart's
-//!   dense networks that is about 70 % of all steps (all but the last few
-//!   of a route).
-//! - [`Decoder::decode_pair`] advances two walks in lock-step so the core
-//!   overlaps their serial scan → pick → next-row chains; the solvers decode
-//!   in pairs.
+//! - Each priority is packed once per decode into an `i32` *key* whose
+//!   order is the priority order and whose lowest 7 bits hold the node id
+//!   ([`pack_key`]). Choosing the next node is one masked max over the
+//!   padded row: `key where reach ≤ slack and unvisited`; the winner's id is
+//!   read back from its bits. With AVX-512 that is one compare and one
+//!   masked integer max per sixteen nodes, the visited set a bit mask in
+//!   the compare mask (keys are never rewritten, so no store sits in front
+//!   of the next load); the AVX2 and portable copies set visited keys to
+//!   the "no candidate" value instead. All compute the same max, so routes
+//!   do not depend on the machine (tests hold them equal).
+//! - One step of a walk is a short serial chain (time left → compare → max
+//!   → id → next row), so [`Decoder::decode_stream`] keeps
+//!   [`IN_FLIGHT`] walks going at once, one step of each in turn, and the
+//!   core overlaps their chains; a walk that reaches the goal hands its lane
+//!   straight to the next vector, so no lane waits for a batch's longest
+//!   walk. The solvers decode their whole population as one stream.
 //! - A step carries only the route's time (the next step's slack needs
-//!   it; read from the dense time table, a quarter of the edge records'
-//!   size, so it stays in L1 on small networks); distance, weight, risk
-//!   and tasks are summed once the route is known, in the same order, so
-//!   the figures are bit-for-bit those of a step-by-step sum.
+//!   it); distance, weight, risk and tasks are summed once the route is
+//!   known, in the same order, so the figures are bit-for-bit those of a
+//!   step-by-step sum.
 //! - The repair runs, per cut point, an A* search with the look-ahead's
 //!   shortest time home as heuristic, pruned by the time left, so it only
-//!   explores near-quickest paths (`Decoder::repair`).
+//!   explores near-quickest paths (`Repair::repair`).
 //! - Nothing allocates: every buffer is a fixed array in the [`Decoder`].
 
-use crate::problem::{MAX_NODES, Problem};
+use crate::problem::{MAX_NODES, Problem, f32_down};
 use crate::route::{Route, RouteEval};
 
-/// A priority value the decoder accepts: `f64`, or `f32` (widened exactly,
-/// so an `f32` vector decodes exactly like its `f64` copy; the PSO keeps
-/// its swarm in `f32` for twice the SIMD width).
+/// A priority value the decoder accepts: `f32`, or `f64` (rounded to the
+/// nearest `f32`, which keeps the order up to ties).
 pub trait Priority: Copy + private::Sealed {
-    /// The value as `f64` (exact).
-    fn to_f64(self) -> f64;
+    /// The value as `f32`.
+    fn to_f32(self) -> f32;
 }
 
 impl Priority for f64 {
     #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self
+    fn to_f32(self) -> f32 {
+        self as f32
     }
 }
 
 impl Priority for f32 {
     #[inline(always)]
-    fn to_f64(self) -> f64 {
-        f64::from(self)
+    fn to_f32(self) -> f32 {
+        self
     }
 }
 
@@ -86,14 +89,17 @@ pub const PRIORITY_MIN: f64 = -200.0;
 pub const PRIORITY_MAX: f64 = 100.0;
 
 /// Width of one step of the candidate scan, in nodes (one AVX-512 vector
-/// of `f64`). Rows are scanned in whole blocks; columns ≥ n read +∞ reach,
-/// so no scan takes them.
-pub const SCAN_BLOCK: usize = 8;
+/// of `f32`/`i32`). Rows are scanned in whole blocks; columns ≥ n read +∞
+/// reach, so no scan takes them.
+pub const SCAN_BLOCK: usize = 16;
 
 const _: () = assert!(
     MAX_NODES.is_multiple_of(SCAN_BLOCK) && MAX_NODES <= 128,
     "ids must fit the key's 7 low bits"
 );
+
+/// Walks [`Decoder::decode_stream`] keeps going at once.
+pub const IN_FLIGHT: usize = 8;
 
 /// Number of entries a scan covers for `n` nodes (n rounded up to a whole
 /// [`SCAN_BLOCK`]). Solvers size their per-node rows with it.
@@ -102,48 +108,41 @@ pub const fn padded_len(n: usize) -> usize {
     n.div_ceil(SCAN_BLOCK) * SCAN_BLOCK
 }
 
-/// Packs priority `p` of node `id` (< 128) into a key: a normal positive
-/// `f64` in [2^-1022, 4) that orders like `p` (NaN as −∞) down to 2^-43
-/// relative, breaks ties towards the lower id, and carries the id in its 7
-/// lowest bits. Key 0.0 means "not a candidate" and is below every key.
+/// The key of "no candidate": below every key [`pack_key`] makes.
+pub const NO_KEY: i32 = i32::MIN;
+
+/// Packs priority `p` of node `id` (< 128) into a key: an `i32` that orders
+/// like `p` (NaN as −∞) down to 2^-16 relative, breaks ties towards the
+/// lower id, carries the id in its 7 lowest bits, and is above [`NO_KEY`].
 #[inline(always)]
-pub fn pack_key(p: f64, id: usize) -> f64 {
+pub fn pack_key(p: f32, id: usize) -> i32 {
     // Written with selects and shifts only, so a loop of these vectorises.
-    let b = if p.is_nan() {
-        f64::NEG_INFINITY.to_bits()
-    } else {
-        p.to_bits()
-    };
-    // The classic monotone map of IEEE bits onto unsigned integers:
-    // negative values flip every bit, others flip the sign bit.
-    let sign = ((b as i64) >> 63) as u64;
-    let mono = b ^ (sign | (1 << 63));
-    // Two bits down keeps the exponent field below all-ones (finite, < 4);
-    // adding 2^52 keeps the result normal (no subnormal slow paths).
-    let k = ((mono >> 2) + (1 << 52)) & !0x7F;
-    f64::from_bits(k | (127 - id as u64))
+    let b = if p.is_nan() { f32::NEG_INFINITY } else { p }.to_bits() as i32;
+    // The classic map of IEEE bits onto signed integers: negative values
+    // flip every bit but the sign, so larger magnitudes sort lower.
+    let mono = b ^ (((b >> 31) as u32) >> 1) as i32;
+    (mono & !0x7F) | (127 - id as i32)
 }
 
 /// The node id a key carries.
 #[inline(always)]
-pub fn key_id(key: f64) -> usize {
-    127 - (key.to_bits() & 0x7F) as usize
+pub fn key_id(key: i32) -> usize {
+    127 - (key & 0x7F) as usize
 }
 
-/// The largest `key[c]` over columns with `reach[c] ≤ slack`, or 0.0 when
-/// there is none. Branch-free over fixed blocks (the comparison becomes a
-/// bit mask ANDed onto the key), so it vectorises.
+/// The largest `key[c]` over columns with `reach[c] ≤ slack`, or
+/// [`NO_KEY`] when there is none (visited keys are [`NO_KEY`]). Branch-free
+/// over fixed blocks, so it vectorises.
 #[inline(always)]
-fn best_key(reach: &[f64], key: &[f64; MAX_NODES], slack: f64, len: usize) -> f64 {
-    let mut acc = [0.0f64; SCAN_BLOCK];
+fn best_key(reach: &[f32], key: &[i32; MAX_NODES], slack: f32, len: usize) -> i32 {
+    let mut acc = [NO_KEY; SCAN_BLOCK];
     for (r, k) in reach[..len]
         .chunks_exact(SCAN_BLOCK)
         .zip(key[..len].chunks_exact(SCAN_BLOCK))
     {
         for l in 0..SCAN_BLOCK {
-            let mask = u64::from(r[l] <= slack).wrapping_neg();
-            let v = f64::from_bits(k[l].to_bits() & mask);
-            acc[l] = if v > acc[l] { v } else { acc[l] };
+            let v = if r[l] <= slack { k[l] } else { NO_KEY };
+            acc[l] = acc[l].max(v);
         }
     }
     // Pairwise tree, so the reduction is log2(SCAN_BLOCK) vector steps.
@@ -151,79 +150,118 @@ fn best_key(reach: &[f64], key: &[f64; MAX_NODES], slack: f64, len: usize) -> f6
     while width > 1 {
         width /= 2;
         for l in 0..width {
-            acc[l] = if acc[l + width] > acc[l] {
-                acc[l + width]
-            } else {
-                acc[l]
-            };
+            acc[l] = acc[l].max(acc[l + width]);
         }
     }
     acc[0]
 }
 
-/// [`best_key`] for AVX-512, written with intrinsics, over the columns
-/// whose bit is set in `allowed`: with `FIT`, those whose reach fits in
-/// `slack` (the caller allows the unvisited ones); without, all of them
-/// (the caller allows the unvisited neighbours, having checked that every
-/// neighbour fits, so the row is not even read). Visited nodes are left
-/// out through the bit mask, not by zeroing their keys, so the walk never
-/// stores into the key row it is about to load (that would stall store
-/// forwarding). Same result as [`best_key`] on the same keys with visited
-/// keys zeroed.
+/// The AVX-512 scans, written with intrinsics. Visited nodes are left out
+/// through the compare mask (bit set in `allowed` = unvisited), not by
+/// rewriting their keys, so no store sits in front of the next load. Same
+/// maxima as [`best_key`] on the same keys with visited keys at [`NO_KEY`].
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline]
-fn best_key_avx512<const FIT: bool>(
-    reach: &[f64],
-    key: &[f64; MAX_NODES],
-    slack: f64,
-    len: usize,
-    allowed: u128,
-) -> f64 {
+mod avx512 {
     use core::arch::x86_64::*;
-    // The loads below rely on this (raw pointers, no bounds checks).
-    assert!(len <= reach.len() && len <= MAX_NODES && len.is_multiple_of(SCAN_BLOCK));
-    let s = _mm512_set1_pd(slack);
-    // One block: allowed lanes (that fit) fold into `acc` by max. Keys are
-    // positive normal doubles, so they order like their bits as unsigned
-    // integers, and the integer max is the quicker instruction.
-    #[inline(always)]
-    fn fold<const FIT: bool>(
-        acc: __m512i,
-        reach: &[f64],
-        key: &[f64; MAX_NODES],
-        s: __m512d,
-        base: usize,
-        allowed: u8,
-    ) -> __m512i {
-        // SAFETY: the caller keeps base + 8 ≤ len ≤ both lengths, and AVX-512F is
-        // enabled in every caller (this is inlined into one).
-        unsafe {
-            let m = if FIT {
-                _mm512_mask_cmp_pd_mask::<_CMP_LE_OQ>(allowed, _mm512_loadu_pd(reach.as_ptr().add(base)), s)
-            } else {
-                allowed
-            };
-            _mm512_mask_max_epu64(acc, m, acc, _mm512_loadu_si512(key.as_ptr().add(base).cast()))
+
+    use super::{IN_FLIGHT, MAX_NODES, NO_KEY, SCAN_BLOCK};
+
+    /// Per column of one row: the running max of the keys of allowed
+    /// columns whose reach fits in `slack`, sixteen columns a register
+    /// (not yet reduced across the register).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn scan(reach: &[f32], key: &[i32; MAX_NODES], slack: f32, len: usize, allowed: u128) -> __m512i {
+        // The loads below rely on this (raw pointers, no bounds checks).
+        assert!(len <= reach.len() && len <= MAX_NODES && len.is_multiple_of(SCAN_BLOCK));
+        let s = _mm512_set1_ps(slack);
+        let mut acc = _mm512_set1_epi32(NO_KEY);
+        // Shifted by a constant each block: a variable 128-bit shift costs
+        // several instructions.
+        let mut rest = allowed;
+        let mut base = 0;
+        while base < len {
+            // SAFETY: base + 16 ≤ len ≤ both lengths (asserted above).
+            unsafe {
+                let m =
+                    _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(rest as u16, _mm512_loadu_ps(reach.as_ptr().add(base)), s);
+                acc = _mm512_mask_max_epi32(acc, m, acc, _mm512_loadu_si512(key.as_ptr().add(base).cast()));
+            }
+            rest >>= SCAN_BLOCK;
+            base += SCAN_BLOCK;
         }
+        acc
     }
-    // Two accumulators (even and odd blocks) halve the max chain's latency.
-    let (mut a0, mut a1) = (_mm512_setzero_si512(), _mm512_setzero_si512());
-    let mut base = 0;
-    // Shifted by a constant each round: a variable 128-bit shift costs
-    // several instructions per block.
-    let mut rest = allowed;
-    while base + 2 * SCAN_BLOCK <= len {
-        let pair = rest as u16;
-        rest >>= 2 * SCAN_BLOCK;
-        a0 = fold::<FIT>(a0, reach, key, s, base, pair as u8);
-        a1 = fold::<FIT>(a1, reach, key, s, base + SCAN_BLOCK, (pair >> 8) as u8);
-        base += 2 * SCAN_BLOCK;
+
+    /// The best key of one row (see [`super::best_key`]).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(super) fn best_key(reach: &[f32], key: &[i32; MAX_NODES], slack: f32, len: usize, allowed: u128) -> i32 {
+        _mm512_reduce_max_epi32(scan(reach, key, slack, len, allowed))
     }
-    if base < len {
-        a0 = fold::<FIT>(a0, reach, key, s, base, rest as u8);
+
+    /// `f32_down(limit − time[l])` for eight lanes in one conversion with
+    /// rounding towards −∞ (the same values as the scalar helper).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(super) fn slack(limit: f64, time: &[f64; IN_FLIGHT]) -> [f32; IN_FLIGHT] {
+        // SAFETY: `time` is eight f64s; unaligned load.
+        let t = unsafe { _mm512_loadu_pd(time.as_ptr()) };
+        let left = _mm512_sub_pd(_mm512_set1_pd(limit), t);
+        let down = _mm512_cvt_roundpd_ps::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(left);
+        let mut out = [0.0f32; IN_FLIGHT];
+        // SAFETY: `out` is eight f32s; unaligned store.
+        unsafe { _mm256_storeu_ps(out.as_mut_ptr(), down) };
+        out
     }
-    f64::from_bits(_mm512_reduce_max_epu64(_mm512_max_epu64(a0, a1)))
+
+    /// The best keys of eight rows at once: the eight scans, then one
+    /// joint reduction (a butterfly over the eight registers, a third of
+    /// the shuffles of eight separate reductions).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(super) fn best_keys(
+        rows: [&[f32]; IN_FLIGHT],
+        keys: &[[i32; MAX_NODES]; IN_FLIGHT],
+        slack: &[f32; IN_FLIGHT],
+        len: usize,
+        allowed: &[u128; IN_FLIGHT],
+    ) -> [i32; IN_FLIGHT] {
+        let a: [__m512i; IN_FLIGHT] = core::array::from_fn(|l| scan(rows[l], &keys[l], slack[l], len, allowed[l]));
+        // Halves of two lanes' registers side by side, then their max:
+        // each result holds lane 2j in 128-bit chunks 0–1, 2j+1 in 2–3.
+        let halves = |x: __m512i, y: __m512i| {
+            _mm512_max_epi32(
+                _mm512_shuffle_i64x2::<0b01_00_01_00>(x, y),
+                _mm512_shuffle_i64x2::<0b11_10_11_10>(x, y),
+            )
+        };
+        let h = [
+            halves(a[0], a[1]),
+            halves(a[2], a[3]),
+            halves(a[4], a[5]),
+            halves(a[6], a[7]),
+        ];
+        // Again: chunk k now holds lane k of the four.
+        let quarters = |x: __m512i, y: __m512i| {
+            _mm512_max_epi32(
+                _mm512_shuffle_i64x2::<0b10_00_10_00>(x, y),
+                _mm512_shuffle_i64x2::<0b11_01_11_01>(x, y),
+            )
+        };
+        let q = [quarters(h[0], h[1]), quarters(h[2], h[3])];
+        // Within each chunk: four values to one (every position).
+        let within = |x: __m512i| {
+            let x = _mm512_max_epi32(x, _mm512_shuffle_epi32::<0b01_00_11_10>(x));
+            _mm512_max_epi32(x, _mm512_shuffle_epi32::<0b10_11_00_01>(x))
+        };
+        let mut out = [[0i32; 16]; 2];
+        for (o, x) in out.iter_mut().zip(q) {
+            // SAFETY: `o` is 16 i32s; unaligned store.
+            unsafe { _mm512_storeu_si512(o.as_mut_ptr().cast(), within(x)) };
+        }
+        core::array::from_fn(|l| out[l / 4][4 * (l % 4)])
+    }
 }
 
 /// Which compiled copy of the walk to run.
@@ -269,77 +307,210 @@ impl Kernel {
     }
 }
 
-/// Where a greedy walk stands.
-struct Walk {
-    cur: usize,
-    visited: u128,
-    /// Figures of the route so far.
-    e: RouteEval,
-    running: bool,
-    dead_end: bool,
+/// The walks in flight, one column per lane (struct of arrays, so one
+/// round steps every lane with independent chains side by side).
+struct Lanes {
+    /// Packed priority keys; with the AVX2/portable scan, [`NO_KEY`] for
+    /// visited nodes.
+    key: [[i32; MAX_NODES]; IN_FLIGHT],
+    route: [Route; IN_FLIGHT],
+    /// Visited nodes; all ones for an idle lane (so its scan finds nothing).
+    visited: [u128; IN_FLIGHT],
+    /// Time of the route so far, s (the next step's slack needs it).
+    time_s: [f64; IN_FLIGHT],
+    cur: [usize; IN_FLIGHT],
+    /// Which vector of the stream each lane decodes.
+    item: [usize; IN_FLIGHT],
 }
 
+impl Lanes {
+    const EMPTY: Self = Self {
+        key: [[NO_KEY; MAX_NODES]; IN_FLIGHT],
+        route: [Route::new(); IN_FLIGHT],
+        visited: [u128::MAX; IN_FLIGHT],
+        time_s: [0.0; IN_FLIGHT],
+        cur: [0; IN_FLIGHT],
+        item: [0; IN_FLIGHT],
+    };
+
+    /// Packs the keys of `priorities` into lane `l` and puts its walk on
+    /// the start. Keys in the padding (n..len) are left as they are: their
+    /// reach is +∞, so no scan ever takes them.
+    #[inline(always)]
+    fn begin<const AVX512: bool, P: Priority>(&mut self, l: usize, p: &Problem, priorities: &[P], item: usize) {
+        let n = p.n();
+        let (keys, prio) = (&mut self.key[l][..n], &priorities[..n]);
+        for c in 0..n {
+            keys[c] = pack_key(prio[c].to_f32(), c);
+        }
+        let cur = p.start();
+        self.route[l].clear();
+        self.route[l].push(cur);
+        if !AVX512 {
+            self.key[l][cur] = NO_KEY;
+        }
+        self.visited[l] = 1u128 << cur;
+        self.time_s[l] = 0.0;
+        self.cur[l] = cur;
+        self.item[l] = item;
+    }
+
+    /// One greedy step of lanes 0..W; returns the lanes whose walk ended
+    /// (reached the goal, or a dead end: their route is left as it was).
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lanes are indexed across several arrays
+    fn round<const AVX512: bool, const W: usize>(&mut self, p: &Problem, limit: f64) -> u32 {
+        let len = p.stride();
+        let mut slack = [0.0f32; IN_FLIGHT];
+        let mut best = [NO_KEY; IN_FLIGHT];
+        if AVX512 {
+            #[cfg(target_arch = "x86_64")]
+            {
+                // SAFETY: only the `*_avx512` streams instantiate AVX512 =
+                // true, and they run only on CPUs with AVX-512F.
+                unsafe {
+                    if W == IN_FLIGHT {
+                        slack = avx512::slack(limit, &self.time_s);
+                        let rows = core::array::from_fn(|l| p.reach_row(self.cur[l]));
+                        let allowed = core::array::from_fn(|l| !self.visited[l]);
+                        best = avx512::best_keys(rows, &self.key, &slack, len, &allowed);
+                    } else {
+                        for l in 0..W {
+                            slack[l] = f32_down(limit - self.time_s[l]);
+                            let row = p.reach_row(self.cur[l]);
+                            best[l] = avx512::best_key(row, &self.key[l], slack[l], len, !self.visited[l]);
+                        }
+                    }
+                }
+            }
+        } else {
+            for l in 0..W {
+                slack[l] = f32_down(limit - self.time_s[l]);
+                best[l] = best_key(p.reach_row(self.cur[l]), &self.key[l], slack[l], len);
+            }
+        }
+        let goal = p.goal();
+        let mut ended = 0u32;
+        for l in 0..W {
+            if best[l] == NO_KEY {
+                ended |= 1 << l;
+                continue;
+            }
+            let next = key_id(best[l]);
+            // Only the time is kept while walking (the next step waits for
+            // it); the other figures are summed once the route is known.
+            self.time_s[l] += p.time_s(self.cur[l], next);
+            self.route[l].push(next);
+            self.visited[l] |= 1 << next;
+            if !AVX512 {
+                self.key[l][next] = NO_KEY;
+            }
+            self.cur[l] = next;
+            ended |= u32::from(next == goal) << l;
+        }
+        ended
+    }
+}
+
+/// The stream loop: [`IN_FLIGHT`] walks at once, stepped in rounds; a
+/// finished walk's lane takes the next vector at once. `done(i, route, e)`
+/// is called once per vector, in the order walks finish (a function of the
+/// vectors alone, the same on every kernel).
 #[inline(always)]
-fn walk_pair<const AVX512: bool, P: Priority>(
-    da: &mut Decoder,
-    db: &mut Decoder,
+fn stream<'a, const AVX512: bool, P: Priority + 'a>(
+    d: &mut Decoder,
     p: &Problem,
-    a: &[P],
-    b: &[P],
-    out_a: &mut Route,
-    out_b: &mut Route,
-) -> (RouteEval, RouteEval) {
-    let mut wa = da.begin::<AVX512, P>(p, a, out_a);
-    let mut wb = db.begin::<AVX512, P>(p, b, out_b);
-    while wa.running && wb.running {
-        da.step::<AVX512>(p, &mut wa, out_a);
-        db.step::<AVX512>(p, &mut wb, out_b);
+    count: usize,
+    vector: &dyn Fn(usize) -> &'a [P],
+    done: &mut dyn FnMut(usize, &Route, RouteEval),
+) {
+    // One or two vectors (single and paired decodes) use that many lanes.
+    match count {
+        1 => stream_w::<AVX512, 1, P>(d, p, count, vector, done),
+        2 => stream_w::<AVX512, 2, P>(d, p, count, vector, done),
+        _ => stream_w::<AVX512, IN_FLIGHT, P>(d, p, count, vector, done),
     }
-    while wa.running {
-        da.step::<AVX512>(p, &mut wa, out_a);
+}
+
+/// [`stream`] on lanes 0..W.
+#[inline(always)]
+fn stream_w<'a, const AVX512: bool, const W: usize, P: Priority + 'a>(
+    d: &mut Decoder,
+    p: &Problem,
+    count: usize,
+    vector: &dyn Fn(usize) -> &'a [P],
+    done: &mut dyn FnMut(usize, &Route, RouteEval),
+) {
+    let limit = p.budget_limit_s();
+    let Decoder { lanes, repair } = d;
+    let mut live = 0u32;
+    for l in 0..W {
+        if l < count {
+            lanes.begin::<AVX512, P>(l, p, vector(l), l);
+            live |= 1 << l;
+        } else {
+            lanes.visited[l] = u128::MAX;
+        }
     }
-    while wb.running {
-        db.step::<AVX512>(p, &mut wb, out_b);
+    let mut next = count.min(W);
+    while live != 0 {
+        let mut ended = lanes.round::<AVX512, W>(p, limit) & live;
+        while ended != 0 {
+            let l = ended.trailing_zeros() as usize;
+            ended &= ended - 1;
+            let route = &mut lanes.route[l];
+            let e = if route.last() == Some(p.goal()) {
+                let e = repair.sum_figures::<false>(p, route);
+                debug_assert_eq!(e.time_s.to_bits(), lanes.time_s[l].to_bits());
+                RouteEval {
+                    feasible: e.time_s <= limit,
+                    ..e
+                }
+            } else {
+                repair.repair(p, route)
+            };
+            debug_assert_eq!(p.evaluate(route), Some(e));
+            done(lanes.item[l], route, e);
+            if next < count {
+                lanes.begin::<AVX512, P>(l, p, vector(next), next);
+                next += 1;
+            } else {
+                live &= !(1 << l);
+                lanes.visited[l] = u128::MAX;
+            }
+        }
     }
-    (da.finish(p, &wa, out_a), db.finish(p, &wb, out_b))
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-fn walk_pair_avx512<P: Priority>(
-    da: &mut Decoder,
-    db: &mut Decoder,
+fn stream_avx512<'a, P: Priority + 'a>(
+    d: &mut Decoder,
     p: &Problem,
-    a: &[P],
-    b: &[P],
-    out_a: &mut Route,
-    out_b: &mut Route,
-) -> (RouteEval, RouteEval) {
-    walk_pair::<true, P>(da, db, p, a, b, out_a, out_b)
+    count: usize,
+    vector: &dyn Fn(usize) -> &'a [P],
+    done: &mut dyn FnMut(usize, &Route, RouteEval),
+) {
+    stream::<true, P>(d, p, count, vector, done)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn walk_pair_avx2<P: Priority>(
-    da: &mut Decoder,
-    db: &mut Decoder,
+fn stream_avx2<'a, P: Priority + 'a>(
+    d: &mut Decoder,
     p: &Problem,
-    a: &[P],
-    b: &[P],
-    out_a: &mut Route,
-    out_b: &mut Route,
-) -> (RouteEval, RouteEval) {
-    walk_pair::<false, P>(da, db, p, a, b, out_a, out_b)
+    count: usize,
+    vector: &dyn Fn(usize) -> &'a [P],
+    done: &mut dyn FnMut(usize, &Route, RouteEval),
+) {
+    stream::<false, P>(d, p, count, vector, done)
 }
-
-/// Scratch space for decoding; build once, reuse for every decode.
-pub struct Decoder {
-    /// Packed priority keys of the decode in hand; 0 for visited nodes.
-    key: [f64; MAX_NODES],
+/// The repair's scratch space (see [`Repair::repair`]).
+struct Repair {
     /// Figures of the route's first i edges, for i = 0..len (filled by
     /// `sum_figures` when a walk needs repair).
     prefix: [RouteEval; MAX_NODES],
-    /// Repair's A* search (see [`Decoder::astar_home`]).
+    /// The A* search (see [`Repair::astar_home`]).
     open: [f64; MAX_NODES],
     done: [f64; MAX_NODES],
     order: [u64; MAX_NODES],
@@ -348,6 +519,12 @@ pub struct Decoder {
     settled: [u8; MAX_NODES],
     settled_len: usize,
     path: [u8; MAX_NODES],
+}
+
+/// Scratch space for decoding; build once, reuse for every decode.
+pub struct Decoder {
+    lanes: Lanes,
+    repair: Repair,
 }
 
 impl Default for Decoder {
@@ -360,22 +537,24 @@ impl Decoder {
     /// A decoder with its buffers ready.
     pub const fn new() -> Self {
         Self {
-            key: [0.0; MAX_NODES],
-            prefix: [RouteEval {
-                time_s: 0.0,
-                distance_m: 0.0,
-                weight: 0.0,
-                risk_ratio_sum: 0.0,
-                tasks: 0,
-                feasible: false,
-            }; MAX_NODES],
-            open: [0.0; MAX_NODES],
-            done: [0.0; MAX_NODES],
-            order: [0; MAX_NODES],
-            stamp: 0,
-            settled: [0; MAX_NODES],
-            settled_len: 0,
-            path: [0; MAX_NODES],
+            lanes: Lanes::EMPTY,
+            repair: Repair {
+                prefix: [RouteEval {
+                    time_s: 0.0,
+                    distance_m: 0.0,
+                    weight: 0.0,
+                    risk_ratio_sum: 0.0,
+                    tasks: 0,
+                    feasible: false,
+                }; MAX_NODES],
+                open: [0.0; MAX_NODES],
+                done: [0.0; MAX_NODES],
+                order: [0; MAX_NODES],
+                stamp: 0,
+                settled: [0; MAX_NODES],
+                settled_len: 0,
+                path: [0; MAX_NODES],
+            },
         }
     }
 
@@ -396,26 +575,19 @@ impl Decoder {
         out: &mut Route,
     ) -> RouteEval {
         let priorities = &priorities[..p.n()];
-        match kernel.usable() {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `usable` only yields Avx512 on CPUs with AVX-512F.
-            Kernel::Avx512 => unsafe { self.walk_avx512(p, priorities, out) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `usable` only yields Avx2 on CPUs with AVX2.
-            Kernel::Avx2 => unsafe { self.walk_avx2(p, priorities, out) },
-            _ => self.walk::<false, P>(p, priorities, out),
-        }
+        let mut result = RouteEval::default();
+        self.stream_with(kernel, p, 1, &|_| priorities, &mut |_, r, e| {
+            *out = *r;
+            result = e;
+        });
+        result
     }
 
-    /// Decodes two vectors with two decoders at once: the two greedy walks
-    /// advance in lock-step, so the processor overlaps their (otherwise
-    /// serial) scan → pick → next-row chains. Exactly the results of
-    /// `self.decode(p, a, out_a)` and `other.decode(p, b, out_b)`.
+    /// Decodes two vectors at once (two walks in flight): exactly the
+    /// results of `self.decode(p, a, out_a)` and `self.decode(p, b, out_b)`.
     #[inline]
-    #[allow(clippy::too_many_arguments)]
     pub fn decode_pair<P: Priority>(
         &mut self,
-        other: &mut Decoder,
         p: &Problem,
         a: &[P],
         b: &[P],
@@ -423,130 +595,64 @@ impl Decoder {
         out_b: &mut Route,
     ) -> (RouteEval, RouteEval) {
         let (a, b) = (&a[..p.n()], &b[..p.n()]);
-        match Kernel::detect() {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `detect` only yields Avx512 on CPUs with AVX-512F.
-            Kernel::Avx512 => unsafe { walk_pair_avx512(self, other, p, a, b, out_a, out_b) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `detect` only yields Avx2 on CPUs with AVX2.
-            Kernel::Avx2 => unsafe { walk_pair_avx2(self, other, p, a, b, out_a, out_b) },
-            _ => walk_pair::<false, P>(self, other, p, a, b, out_a, out_b),
-        }
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-    fn walk_avx512<P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> RouteEval {
-        self.walk::<true, P>(p, priorities, out)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn walk_avx2<P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> RouteEval {
-        self.walk::<false, P>(p, priorities, out)
-    }
-
-    /// Packs the keys, then walks greedily over them.
-    #[inline(always)]
-    fn walk<const AVX512: bool, P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> RouteEval {
-        let mut w = self.begin::<AVX512, P>(p, priorities, out);
-        while w.running {
-            self.step::<AVX512>(p, &mut w, out);
-        }
-        self.finish(p, &w, out)
-    }
-
-    /// Packs the keys and puts the walk on the start. `AVX512`: visited
-    /// nodes are tracked only as a bit mask for [`best_key_avx512`];
-    /// otherwise their keys are also zeroed for [`best_key`]. Keys in the
-    /// padding (n..len) are left as they are: their reach is +∞, so no scan
-    /// ever takes them.
-    #[inline(always)]
-    fn begin<const AVX512: bool, P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> Walk {
-        let n = p.n();
-        let (keys, prio) = (&mut self.key[..n], &priorities[..n]);
-        for c in 0..n {
-            keys[c] = pack_key(prio[c].to_f64(), c);
-        }
-        let cur = p.start();
-        out.clear();
-        out.push(cur);
-        if !AVX512 {
-            self.key[cur] = 0.0;
-        }
-        let e = RouteEval {
-            weight: p.prize(cur),
-            ..RouteEval::default()
-        };
-        Walk {
-            cur,
-            visited: 1u128 << cur,
-            e,
-            running: cur != p.goal(),
-            dead_end: false,
-        }
-    }
-
-    /// One greedy step: the highest-key neighbour that fits, or a dead end.
-    #[inline(always)]
-    fn step<const AVX512: bool>(&mut self, p: &Problem, w: &mut Walk, out: &mut Route) {
-        let len = padded_len(p.n());
-        let slack = p.budget_limit_s() - w.e.time_s;
-        let best = if AVX512 {
-            #[cfg(target_arch = "x86_64")]
-            {
-                // SAFETY: only the `*_avx512` walks instantiate AVX512 =
-                // true, and they run only on CPUs with AVX-512F.
-                unsafe {
-                    // Most steps (about 70 % on the chart's networks) have
-                    // time for every neighbour: then only keys are scanned.
-                    let row = p.reach_row(w.cur);
-                    if slack >= p.reach_max_s(w.cur) {
-                        best_key_avx512::<false>(row, &self.key, slack, len, p.neighbours(w.cur).0 & !w.visited)
-                    } else {
-                        best_key_avx512::<true>(row, &self.key, slack, len, !w.visited)
-                    }
+        let mut result = [RouteEval::default(); 2];
+        self.stream_with(
+            Kernel::detect(),
+            p,
+            2,
+            &|i| if i == 0 { a } else { b },
+            &mut |i, r, e| {
+                if i == 0 {
+                    *out_a = *r;
+                } else {
+                    *out_b = *r;
                 }
-            }
-            #[cfg(not(target_arch = "x86_64"))]
-            unreachable!()
-        } else {
-            best_key(p.reach_row(w.cur), &self.key, slack, len)
-        };
-        if best == 0.0 {
-            w.running = false;
-            w.dead_end = true;
-            return;
-        }
-        let next = key_id(best);
-        // Only the time is kept while walking (the next step waits for it);
-        // the other figures are summed once the route is known (`finish`).
-        w.e.time_s += p.time_s(w.cur, next);
-        out.push(next);
-        w.visited |= 1 << next;
-        if !AVX512 {
-            self.key[next] = 0.0;
-        }
-        w.cur = next;
-        w.running = next != p.goal();
+                result[i] = e;
+            },
+        );
+        (result[0], result[1])
     }
 
-    /// The figures of a finished walk, repairing a dead end.
-    #[inline(always)]
-    fn finish(&mut self, p: &Problem, w: &Walk, out: &mut Route) -> RouteEval {
-        if w.dead_end {
-            return self.repair(p, out);
-        }
-        let e = self.sum_figures::<false>(p, out);
-        debug_assert_eq!(e.time_s.to_bits(), w.e.time_s.to_bits());
-        let e = RouteEval {
-            feasible: e.time_s <= p.budget_limit_s(),
-            ..e
-        };
-        debug_assert_eq!(p.evaluate(out), Some(e));
-        e
+    /// Decodes `count` vectors, `vector(i)` for i in 0..count (each at
+    /// least `p.n()` values), with [`IN_FLIGHT`] walks going at once, and
+    /// calls `done(i, route, figures)` once for each as its walk finishes.
+    /// Each vector's route and figures are exactly those of
+    /// [`Decoder::decode`]; the order of the calls depends only on the
+    /// vectors (not on the kernel).
+    #[inline]
+    pub fn decode_stream<'a, P: Priority + 'a>(
+        &mut self,
+        p: &Problem,
+        count: usize,
+        vector: &dyn Fn(usize) -> &'a [P],
+        done: &mut dyn FnMut(usize, &Route, RouteEval),
+    ) {
+        self.stream_with(Kernel::detect(), p, count, vector, done)
     }
 
+    /// [`Decoder::decode_stream`] on a chosen kernel (a kernel this CPU
+    /// lacks falls back to the portable one).
+    pub fn stream_with<'a, P: Priority + 'a>(
+        &mut self,
+        kernel: Kernel,
+        p: &Problem,
+        count: usize,
+        vector: &dyn Fn(usize) -> &'a [P],
+        done: &mut dyn FnMut(usize, &Route, RouteEval),
+    ) {
+        match kernel.usable() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `usable` only yields Avx512 on CPUs with AVX-512F.
+            Kernel::Avx512 => unsafe { stream_avx512(self, p, count, vector, done) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `usable` only yields Avx2 on CPUs with AVX2.
+            Kernel::Avx2 => unsafe { stream_avx2(self, p, count, vector, done) },
+            _ => stream::<false, P>(self, p, count, vector, done),
+        }
+    }
+}
+
+impl Repair {
     /// Sums the figures of `out` edge by edge in route order (the order,
     /// and so the rounding, of a walk accumulating them step by step) and
     /// returns them, not marked feasible; with `PREFIX`, also stores the
@@ -578,23 +684,21 @@ impl Decoder {
     /// Cuts `out` back to the latest node r_k with a quickest path home
     /// (avoiding r_0..r_{k−1} and excluded nodes) that fits in the time
     /// left at r_k, and appends that path; if there is none, returns the
-    /// quickest path from the start (over budget).
+    /// quickest path from the start (over budget). All in `f64`.
     ///
     /// Each r_k is tried with an A* search whose heuristic is the
     /// unrestricted shortest time home (consistent, so each node settles
     /// once and the path found is a quickest one) and which gives up as
     /// soon as the best open estimate exceeds the time left, so it explores
-    /// only near-quickest paths.
-    #[inline(always)]
+    /// only near-quickest paths. The last node is tried too: the walk's
+    /// `f32` test may have refused a step that just fits in `f64`.
+    #[inline(never)]
     fn repair(&mut self, p: &Problem, out: &mut Route) -> RouteEval {
         self.sum_figures::<true>(p, out);
         let limit = p.budget_limit_s();
         let len = padded_len(p.n());
         let mut cut = None;
-        // k = last is skipped: its search would first relax exactly the
-        // sums T(r_k, c) + h(c) = reach(r_k, c) that the walk just found
-        // all over the slack, with the same blocked set, and fail.
-        for k in (0..out.len() - 1).rev() {
+        for k in (0..out.len()).rev() {
             if self.astar_home(p, out, k, limit - self.prefix[k].time_s, len) {
                 cut = Some(k);
                 break;
@@ -867,8 +971,9 @@ mod tests {
     }
 
     /// The paper's rule and the module's repair rule written plainly:
-    /// highest priority (NaN as −∞, ties to the lower id) among unvisited
-    /// neighbours that fit; at a dead end, cut back to the latest r_k whose
+    /// highest key (priority order, NaN as −∞, ties to the lower id; the
+    /// key's own order is tested apart) among unvisited neighbours that
+    /// fit by the f32 test; at a dead end, cut back to the latest r_k whose
     /// quickest path home avoiding r_0..r_{k−1} fits, else the quickest path.
     fn reference_decode(p: &Problem, prio: &[f64]) -> Vec<usize> {
         let mut visited = vec![false; p.n()];
@@ -882,13 +987,14 @@ mod tests {
         let mut prefix = vec![0.0];
         visited[cur] = true;
         while cur != p.goal() {
-            let slack = p.budget_limit_s() - time;
-            let mut best: Option<(f64, usize)> = None;
+            // The walk's f32 test: look-ahead rounded up, time left down.
+            let slack = crate::problem::f32_down(p.budget_limit_s() - time);
+            let mut best: Option<(i32, usize)> = None;
             for c in 0..p.n() {
                 if visited[c] || p.reach_row(cur)[c] > slack {
                     continue;
                 }
-                let v = if prio[c].is_nan() { f64::NEG_INFINITY } else { prio[c] };
+                let v = pack_key(prio[c] as f32, c);
                 if best.is_none_or(|(b, _)| v > b) {
                     best = Some((v, c));
                 }
@@ -921,23 +1027,23 @@ mod tests {
     #[test]
     fn keys_order_like_priorities_and_carry_the_id() {
         let values = [
-            f64::NEG_INFINITY,
-            -1e300,
+            f32::NEG_INFINITY,
+            -1e30,
             -200.0,
             -3.5,
-            -1e-300,
+            -1e-30,
             0.0,
-            1e-300,
+            1e-30,
             2.0,
             100.0,
-            1e300,
-            f64::INFINITY,
+            1e30,
+            f32::INFINITY,
         ];
         for (i, &a) in values.iter().enumerate() {
             for (j, &b) in values.iter().enumerate() {
                 for (ia, ib) in [(3usize, 90usize), (90, 3), (0, 127)] {
                     let (ka, kb) = (pack_key(a, ia), pack_key(b, ib));
-                    assert!(ka.is_normal() && ka > 0.0 && ka < 4.0, "{a}");
+                    assert!(ka > NO_KEY, "{a}");
                     assert_eq!(key_id(ka), ia);
                     if i != j {
                         assert_eq!(ka > kb, a > b, "{a} vs {b}");
@@ -949,28 +1055,31 @@ mod tests {
             }
         }
         // NaN ranks with −∞ (below every other value, ties by id).
-        assert_eq!(pack_key(f64::NAN, 5), pack_key(f64::NEG_INFINITY, 5));
-        assert!(pack_key(f64::NAN, 5) < pack_key(-1e300, 100));
-        // Ten-digit differences survive the packing.
-        assert!(pack_key(-199.999_999_9, 9) > pack_key(-200.0, 1));
-        assert!(pack_key(50.000_000_01, 9) > pack_key(50.0, 1));
+        assert_eq!(pack_key(f32::NAN, 5), pack_key(f32::NEG_INFINITY, 5));
+        assert_eq!(pack_key(-f32::NAN, 5), pack_key(f32::NEG_INFINITY, 5));
+        assert!(pack_key(f32::NAN, 5) < pack_key(-1e30, 100));
+        // Differences of 2^-15 relative survive the packing; 2^-18 tie.
+        assert!(pack_key(-199.99, 9) > pack_key(-200.0, 1));
+        assert!(pack_key(50.002, 9) > pack_key(50.0, 1));
+        assert!(pack_key(50.0002, 9) < pack_key(50.0, 1));
     }
 
     #[test]
-    fn budgets_at_the_edge_of_a_step_decode_alike_on_every_kernel() {
-        // The look-ahead of the first step equals the budget to within a
-        // few ulps: every kernel must make the plain rule's f64 decision on
-        // either side of the edge (no kernel may decide in lower precision).
+    fn budgets_at_the_edge_of_a_step_decode_alike_on_every_kernel_and_never_over() {
+        // The exact look-ahead of the first step equals the budget to
+        // within a few ulps: every kernel makes the same decision as the
+        // plain rule, and none takes a step the exact f64 test refuses.
         let mut inst = line_instance();
         // Times that are not f32 values, so lower precision would show.
         for (i, node) in inst.nodes.iter_mut().enumerate() {
             node.x += 0.1 * i as f64 + 0.012_345_678_9;
         }
-        let base = Problem::from_instance(&inst).unwrap().reach_row(0)[1]; // via node 1
-        assert_ne!(f64::from(base as f32), base);
+        let p0 = Problem::from_instance(&inst).unwrap();
+        let exact = p0.time_s(0, 1) + p0.to_goal_s(1); // via node 1
+        assert_ne!(f64::from(exact as f32), exact);
         let mut checked = 0;
         for k in -40i64..=40 {
-            let limit = base + (k as f64) * base * f64::EPSILON;
+            let limit = exact + (k as f64) * exact * f64::EPSILON;
             let mut inst = inst.clone();
             inst.time_available_s = limit / (1.0 + crate::problem::FEASIBILITY_REL_TOL);
             let Ok(p) = Problem::from_instance(&inst) else { continue };
@@ -978,8 +1087,12 @@ mod tests {
             let plain = reference_decode(&p, &prio);
             for kernel in Kernel::available() {
                 let mut r = Route::new();
-                Decoder::new().decode_with(kernel, &p, &prio, &mut r);
+                let e = Decoder::new().decode_with(kernel, &p, &prio, &mut r);
                 assert_eq!(r.to_vec(), plain, "k={k} {kernel:?}");
+                if p.budget_limit_s() < exact {
+                    assert_ne!(r.to_vec(), vec![0, 1, 2, 3], "k={k}: over the budget");
+                }
+                assert!(e.feasible && e.time_s <= p.budget_limit_s(), "k={k}");
             }
             checked += 1;
         }
@@ -1042,7 +1155,7 @@ mod tests {
             let mut r2 = Route::new();
             let e2 = Decoder::new().decode(&p, &flipped, &mut r2);
             let (mut pa, mut pb) = (Route::new(), Route::new());
-            let (ea, eb) = Decoder::new().decode_pair(&mut Decoder::new(), &p, &raw, &flipped, &mut pa, &mut pb);
+            let (ea, eb) = Decoder::new().decode_pair(&p, &raw, &flipped, &mut pa, &mut pb);
             prop_assert_eq!((pa.as_bytes(), pb.as_bytes()), (r.as_bytes(), r2.as_bytes()));
             prop_assert_eq!((ea, eb), (e, e2));
             let checked = p.evaluate(&r);
@@ -1066,7 +1179,7 @@ mod tests {
             n in 2usize..=MAX_NODES,
             density in 0.3f64..1.0,
             budget in 1_000.0f64..60_000.0,
-            count in 1usize..8,
+            count in 1usize..12,
             raw in proptest::collection::vec(
                 prop_oneof![
                     4 => -200.0f32..100.0,
@@ -1077,7 +1190,7 @@ mod tests {
                     1 => Just(f32::INFINITY),
                     1 => Just(f32::NEG_INFINITY),
                 ],
-                8 * MAX_NODES,
+                12 * MAX_NODES,
             ),
         ) {
             let mut inst = random_instance(n, density, budget, seed);
@@ -1089,7 +1202,8 @@ mod tests {
             let p = Problem::from_instance(&inst).unwrap();
             let stride = padded_len(n);
             let mut single = Decoder::new();
-            let (mut da, mut db) = (Decoder::new(), Decoder::new());
+            let mut da = Decoder::new();
+            let mut singles = Vec::new();
             for i in 0..count {
                 let row = &raw[i * stride..i * stride + n];
                 let mut r = Route::new();
@@ -1097,11 +1211,34 @@ mod tests {
                 // Paired with the next vector (or itself for the last).
                 let other = &raw[((i + 1) % count) * stride..][..n];
                 let (mut pa, mut pb) = (Route::new(), Route::new());
-                let (ea, _) = da.decode_pair(&mut db, &p, row, other, &mut pa, &mut pb);
+                let (ea, _) = da.decode_pair(&p, row, other, &mut pa, &mut pb);
                 prop_assert_eq!(pa.as_bytes(), r.as_bytes(), "vector {}", i);
                 prop_assert_eq!(ea, e);
                 let wide: Vec<f64> = row.iter().map(|&x| f64::from(x)).collect();
                 prop_assert_eq!(reference_decode(&p, &wide), r.to_vec());
+                singles.push((r, e));
+            }
+            // The whole set as one stream (more vectors than walks in
+            // flight): each vector's own result, once, in an order that
+            // is the same on every kernel.
+            let mut order = None;
+            for kernel in Kernel::available() {
+                let mut seen = Vec::new();
+                let mut bad = None;
+                da.stream_with(kernel, &p, count, &|i| &raw[i * stride..i * stride + n], &mut |i, r, e| {
+                    if (r.as_bytes(), e) != (singles[i].0.as_bytes(), singles[i].1) {
+                        bad = Some(i);
+                    }
+                    seen.push(i);
+                });
+                prop_assert_eq!(bad, None, "kernel {:?}", kernel);
+                let mut sorted = seen.clone();
+                sorted.sort_unstable();
+                prop_assert_eq!(sorted, (0..count).collect::<Vec<_>>());
+                if let Some(o) = &order {
+                    prop_assert_eq!(o, &seen, "kernel {:?}", kernel);
+                }
+                order = Some(seen);
             }
         }
     }

@@ -151,18 +151,20 @@ impl EdgeData {
 /// Entries of one dense per-pair table.
 const CELLS: usize = MAX_NODES * MAX_NODES;
 
-/// Dense per-pair tables, boxed because they are large (768 KiB). Each is
+/// Dense per-pair tables, boxed because they are large (704 KiB). Each is
 /// row-major with a row stride of `padded_len(n)` (n rounded up to the
 /// decoder's scan block), not `MAX_NODES`, so a small problem's rows sit
 /// together (13 KiB of look-ahead at n = 40 instead of 40 rows spread 1 KiB
 /// apart). Entry (a, b) is at `a * stride + b`.
 struct Tables {
-    /// Look-ahead: T_ab + shortest time from b to the goal; +∞ where there is
-    /// no edge or b is excluded (and in every padding column n..stride,
-    /// which the decoder's padded scan relies on). A decoder may step to b
-    /// only if this fits in the time left. Scanned whole rows at a time, so
-    /// kept apart.
-    reach_s: [f64; CELLS],
+    /// Look-ahead: T_ab + shortest time from b to the goal, rounded *up* to
+    /// `f32` ([`f32_up`]); +∞ where there is no edge or b is excluded (and in
+    /// every padding column n..stride, which the decoder's padded scan
+    /// relies on). A decoder may step to b only if this fits in the time
+    /// left rounded *down* ([`f32_down`]), so an `f32` pass is never a step
+    /// the exact `f64` test would refuse. `f32` puts sixteen candidates in
+    /// one AVX-512 compare. Scanned whole rows at a time, so kept apart.
+    reach_s: [f32; CELLS],
     /// Edge time T_ab, s; +∞ where there is no edge. Duplicates
     /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row, and so
     /// the decoder's step → time → next step chain loads from this small
@@ -185,10 +187,6 @@ pub struct Problem {
     excluded: NodeSet,
     prize: [f64; MAX_NODES],
     to_goal_s: [f64; MAX_NODES],
-    /// Per row u: the largest look-ahead over u's neighbours (+∞ if one
-    /// cannot reach the goal, 0 with none). With at least this much time
-    /// left, every neighbour fits, and a decoder need not read the row.
-    reach_max_s: [f64; MAX_NODES],
     tables: Box<Tables>,
 }
 
@@ -205,7 +203,7 @@ impl Problem {
             unsafe {
                 let p = v.as_mut_ptr();
                 for cell in 0..CELLS {
-                    (*p).reach_s[cell] = f64::INFINITY;
+                    (*p).reach_s[cell] = f32::INFINITY;
                     (*p).time_s[cell] = f64::INFINITY;
                     (*p).edge[cell] = EdgeData::NONE;
                 }
@@ -226,7 +224,6 @@ impl Problem {
             excluded: NodeSet::EMPTY,
             prize: [0.0; MAX_NODES],
             to_goal_s: [f64::INFINITY; MAX_NODES],
-            reach_max_s: [0.0; MAX_NODES],
             tables,
         }
     }
@@ -304,7 +301,7 @@ impl Problem {
         let stride = padded_len(n);
         let used = (self.n * self.stride).max(n * stride);
         self.tables.time_s[..used].fill(f64::INFINITY);
-        self.tables.reach_s[..used].fill(f64::INFINITY);
+        self.tables.reach_s[..used].fill(f32::INFINITY);
         self.tables.edge[..used].fill(EdgeData::NONE);
         let rows = self.n.max(n);
         self.adjacency[..rows].fill(NodeSet::EMPTY);
@@ -362,12 +359,8 @@ impl Problem {
         for u in 0..n {
             for v in 0..n {
                 let cell = u * stride + v;
-                self.tables.reach_s[cell] = self.tables.time_s[cell] + self.to_goal_s[v];
+                self.tables.reach_s[cell] = f32_up(self.tables.time_s[cell] + self.to_goal_s[v]);
             }
-            self.reach_max_s[u] = self.adjacency[u]
-                .iter()
-                .map(|v| self.tables.reach_s[u * stride + v])
-                .fold(0.0, f64::max);
         }
         if !self.to_goal_s[self.start].is_finite() {
             return Err(ProblemError::GoalUnreachable {
@@ -494,16 +487,10 @@ impl Problem {
     pub(crate) fn to_goal_row(&self) -> &[f64; MAX_NODES] {
         &self.to_goal_s
     }
-    /// The largest look-ahead from `u` (< n) to any of its neighbours: with
-    /// at least this much time left at `u`, every neighbour fits.
+    /// Row `u` (< n) of the look-ahead table (`f32`, rounded up):
+    /// [`Problem::stride`] entries, +∞ in the padding columns n..stride.
     #[inline]
-    pub fn reach_max_s(&self, u: usize) -> f64 {
-        self.reach_max_s[u]
-    }
-    /// Row `u` (< n) of the look-ahead table: [`Problem::stride`] entries,
-    /// +∞ in the padding columns n..stride.
-    #[inline]
-    pub fn reach_row(&self, u: usize) -> &[f64] {
+    pub fn reach_row(&self, u: usize) -> &[f32] {
         &self.tables.reach_s[u * self.stride..(u + 1) * self.stride]
     }
     /// Everything the step `a → b` adds to a route (one cache line).
@@ -523,6 +510,31 @@ impl Default for Problem {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// `x` rounded up to `f32`: the least `f32` ≥ x (+∞ above `f32::MAX`).
+#[inline]
+pub fn f32_up(x: f64) -> f32 {
+    let r = x as f32;
+    if f64::from(r) < x { r.next_up() } else { r }
+}
+
+/// `x` (not NaN) rounded down to `f32`: the greatest `f32` ≤ x (−∞ below
+/// `f32::MIN`). Selects only (it sits on the decoder's step chain).
+#[inline(always)]
+pub fn f32_down(x: f64) -> f32 {
+    let r = x as f32;
+    let b = r.to_bits();
+    // The next f32 below r: one step of the bits away from zero for a
+    // negative r, towards zero for a positive one; below 0 is −2^-149.
+    let below = if r > 0.0 {
+        b - 1
+    } else if r < 0.0 {
+        b + 1
+    } else {
+        0x8000_0001
+    };
+    if f64::from(r) > x { f32::from_bits(below) } else { r }
 }
 
 /// Edge time T = d / v + δ (instance format, "Derived quantities"). The one
@@ -548,26 +560,63 @@ mod tests {
         assert_eq!(p.to_goal_s(0), 310.0);
         assert_eq!(p.to_goal_s(1), 220.0);
         assert_eq!(p.reach_row(0)[1], 110.0 + 220.0);
+        assert_eq!(p.reach_row(0)[2], f32::INFINITY);
     }
 
     #[test]
-    fn reach_max_is_the_largest_look_ahead_over_the_neighbours() {
+    fn the_look_ahead_is_rounded_up_and_non_edges_never_fit() {
         let inst = crate::fixtures::random_instance(30, 0.4, 20_000.0, 5);
         let mut p = Problem::new();
         let mut excluded = NodeSet::EMPTY;
         excluded.insert(3);
         p.load_instance(&inst, 0, excluded, 20_000.0).unwrap();
         for u in 0..p.n() {
-            let expected = p.neighbours(u).iter().map(|v| p.reach_row(u)[v]).fold(0.0, f64::max);
-            assert_eq!(p.reach_max_s(u), expected, "row {u}");
-            // Non-neighbours never fit, whatever the slack.
-            for v in 0..p.n() {
-                if !p.has_edge(u, v) {
-                    assert_eq!(p.reach_row(u)[v], f64::INFINITY);
+            for v in 0..p.stride() {
+                let r = p.reach_row(u)[v];
+                if v < p.n() && p.has_edge(u, v) {
+                    let exact = p.time_s(u, v) + p.to_goal_s(v);
+                    assert!(f64::from(r) >= exact && f64::from(r.next_down()) < exact, "{u}->{v}");
+                } else {
+                    assert_eq!(r, f32::INFINITY, "{u}->{v}");
                 }
             }
         }
         assert!(!p.neighbours(0).contains(3));
+    }
+
+    #[test]
+    fn f32_rounding_goes_the_named_way() {
+        for x in [
+            0.0,
+            1.0,
+            0.1,
+            31_000.000_1,
+            -0.1,
+            -2.5e-3,
+            1e300,
+            -1e300,
+            3.3e-42,
+            -3.3e-42,
+            1e-50,
+            -1e-50,
+        ] {
+            let (up, down) = (f32_up(x), f32_down(x));
+            assert!(f64::from(up) >= x && f64::from(down) <= x, "{x}");
+            assert!(f64::from(up.next_down()) < x || up == f32::MIN, "{x}");
+            assert!(f64::from(down.next_up()) > x, "{x}");
+            assert_eq!(
+                down,
+                if f64::from(x as f32) > x {
+                    (x as f32).next_down()
+                } else {
+                    x as f32
+                },
+                "{x}"
+            );
+        }
+        assert_eq!(f32_up(f64::INFINITY), f32::INFINITY);
+        assert_eq!(f32_up(2.0), 2.0);
+        assert_eq!(f32_down(2.0), 2.0);
     }
 
     #[test]

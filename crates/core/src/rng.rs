@@ -53,6 +53,13 @@ impl PlannerRng {
         Self { s, spare_normal: None }
     }
 
+    /// A generator at the given state words (tests compare other
+    /// implementations of the same step against this one).
+    #[cfg(test)]
+    pub(crate) fn from_state(s: [u64; 4]) -> Self {
+        Self { s, spare_normal: None }
+    }
+
     /// Next 64 random bits.
     #[inline]
     pub fn next_u64(&mut self) -> u64 {

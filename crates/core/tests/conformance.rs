@@ -332,26 +332,30 @@ fn pinned(algorithm: Algorithm) -> (Vec<usize>, RouteEval, Instance) {
 #[test]
 fn pso_paper_settings_pinned_route() {
     let (route, e, _) = pinned(Algorithm::Pso);
-    assert_eq!(route, [0, 6, 34, 2, 5, 20, 22, 7, 31, 33, 17, 13, 23, 39]);
+    assert_eq!(route, [0, 6, 13, 17, 35, 15, 37, 1, 9, 38, 26, 34, 23, 39]);
     assert!(e.feasible);
-    assert_eq!(e.weight.to_bits(), 443.8377994161725f64.to_bits());
+    assert_eq!(e.weight.to_bits(), 415.34113623957495f64.to_bits());
 }
 
 /// As above, for the paper-faithful BBO.
 #[test]
 fn bbo_paper_settings_pinned_route() {
     let (route, e, _) = pinned(Algorithm::Bbo);
-    assert_eq!(route, [0, 6, 34, 23, 13, 17, 1, 9, 2, 28, 20, 5, 3, 39]);
+    assert_eq!(route, [0, 11, 1, 34, 6, 37, 15, 35, 17, 13, 23, 39]);
     assert!(e.feasible);
-    assert_eq!(e.weight.to_bits(), 425.6112575323189f64.to_bits());
+    assert_eq!(e.weight.to_bits(), 391.3262799143507f64.to_bits());
 }
 
-/// With a generous budget the default planner is at least as good as the
-/// paper-faithful PSO at its full budget, on several fixed networks and
-/// seeds (quality only; no timing).
+/// The default planner at 100 steps against the paper-faithful PSO at its
+/// full 150 iterations, on twelve fixed networks and seeds (quality only; no
+/// timing): at least as good on average, and on at least three in four
+/// (PSO wins a few: over 40 networks it won 9 before the decoder's f32
+/// arithmetic and 4 after, so a claim on every network would hold only for
+/// lucky seeds).
 #[test]
 fn auto_is_at_least_as_good_as_paper_pso() {
-    for seed in 0..4 {
+    let (mut lost, mut pso_sum, mut auto_sum) = (0, 0.0, 0.0);
+    for seed in 0..12 {
         let inst = random_instance(40, 0.4, 31_000.0, 500 + seed);
         let p = problem(&inst);
         let mut pso = Algorithm::Pso.build(150);
@@ -360,11 +364,18 @@ fn auto_is_at_least_as_good_as_paper_pso() {
         let mut auto = Algorithm::Auto.build(100);
         run(&mut auto, &p, &mut PlannerRng::new(seed), None, Budget::iterations(100));
         let (_, ae) = checked_best(&auto, &inst, &p);
-        assert!(
-            !p.better(&pe, &ae),
-            "seed {seed}: pso {} beats auto {}",
-            pe.weight,
-            ae.weight
-        );
+        assert!(pe.feasible && ae.feasible, "seed {seed}");
+        if p.better(&pe, &ae) {
+            lost += 1;
+        }
+        pso_sum += pe.weight;
+        auto_sum += ae.weight;
     }
+    assert!(lost <= 3, "pso beat auto on {lost} of 12 networks");
+    assert!(
+        auto_sum >= pso_sum,
+        "mean weight: auto {} < pso {}",
+        auto_sum / 12.0,
+        pso_sum / 12.0
+    );
 }

@@ -284,19 +284,17 @@ pub struct IpcOutbox<S: Service, T: OnTopic> {
     seq: u64,
 }
 
-impl<S: Service, T: OnTopic> IpcOutbox<S, T> {
-    /// Like [`Outbox::publish`], then lets `tamper` rewrite the stamped
-    /// message (its header included) before it is sent: fault injection for
-    /// tests (`--inject`), e.g. a repeated sequence number or another
-    /// scenario's fingerprint. The sequence counter advances as usual.
-    pub fn publish_tampered(
+impl<S: Service, T: OnTopic> crate::faulty::TamperOutbox<T> for IpcOutbox<S, T> {
+    fn publish_tampered(
         &mut self,
         fill: &mut dyn FnMut(&mut T),
         tamper: &mut dyn FnMut(&mut T),
     ) -> Result<u64, TransportError> {
         self.send_one(fill, Some(tamper))
     }
+}
 
+impl<S: Service, T: OnTopic> IpcOutbox<S, T> {
     fn send_one(
         &mut self,
         fill: &mut dyn FnMut(&mut T),

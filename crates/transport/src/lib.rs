@@ -27,6 +27,7 @@
 
 #![warn(missing_docs)]
 
+pub mod faulty;
 pub mod guard;
 pub mod ipc;
 pub mod layout;

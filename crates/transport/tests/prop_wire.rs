@@ -18,6 +18,7 @@ use auv_messages::msg::{
 };
 use auv_messages::network::{fill_problem, find_edge, write_snapshot};
 use auv_messages::wire::WireRules;
+use auv_transport::faulty::TamperOutbox;
 use auv_transport::guard::Guarded;
 use auv_transport::ipc::{InProcess, IpcContext, Stamp};
 use auv_transport::{IpcOptions, WaitMode, unique_prefix};

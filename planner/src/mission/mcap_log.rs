@@ -1,6 +1,8 @@
 //! `mission.mcap`: the mission as an MCAP file that Foxglove opens with no
-//! set-up, built once at the end of a run from what the mission already
-//! records (the `mission.log` lines, the vehicle's journal, the world).
+//! set-up, written at the end of a run from what the mission already
+//! records (the `mission.log` lines, the vehicle's journal, the world),
+//! streamed: each message goes to the file as it is made, so memory stays
+//! flat however long the run.
 //!
 //! Contract: topics are `/<vehicle>/…`; every channel is JSON (schema
 //! encoding `jsonschema`, message encoding `json`); the well-known ones use
@@ -13,15 +15,19 @@
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
-use std::io::{Cursor, Seek, Write};
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, Seek, Write};
 use std::path::Path;
 
 use base64::Engine;
 use serde_json::{Value, json};
 
-use auv_messages::journal::{JournalEvent, JournalSummary};
+use super::route_geojson::Visit;
+use auv_messages::journal::JournalEvent;
 use auv_world::chart::WaterMap;
+use auv_world::frame::LocalFrame;
 use auv_world::load::MissionWorld;
+use auv_world::mission_file::Water;
 use auv_world::scenario::{Vec3, World};
 
 /// The coordinate frame of every message.
@@ -38,30 +44,24 @@ pub const LATENCY_SCHEMA: &str = "auv.PlannerLatency";
 /// same resolution as the SVG plot's land layer).
 const CHART_CELLS: f64 = 250.0;
 
-/// Maps chart metres to latitude and longitude. A mission with a geographic
-/// reference passes one to [`MissionRecord::geo`]; the file then also holds
-/// `foxglove.LocationFix` for each pose and a `foxglove.GeoJSON` of the
-/// route travelled (Foxglove's Map panel).
-pub trait GeoReference {
-    /// (latitude, longitude) in degrees of the chart point (x east, y north), m.
-    fn lat_lon(&self, x_m: f64, y_m: f64) -> (f64, f64);
-}
-
-/// What a mission recorded, the input of [`write`].
+/// What a mission recorded, the input of [`write`] (the `mission.log`
+/// text is read as the file is written).
 pub struct MissionRecord<'a> {
     /// The world as generated (epoch 0): chart, waypoints, bounds.
     pub world: &'a MissionWorld,
-    /// The `mission.log` text (one JSON object per line).
-    pub log: &'a str,
-    /// The vehicle's journal.
-    pub journal: &'a JournalSummary,
+    /// The vehicle's poses, from its journal ([`PoseTrack`]).
+    pub poses: &'a [PoseAt],
+    /// Where the vehicle was, in order (the route travelled).
+    pub visits: &'a [Visit],
     /// Vehicle namespace: topics are `/<vehicle>/…`.
     pub vehicle: &'a str,
     /// Plan latency p50, p99, max, µs (wall clock: leave out for a
     /// reproducible file).
     pub latency_us: Option<(u64, u64, u64)>,
-    /// Geographic reference, when the mission has one.
-    pub geo: Option<&'a dyn GeoReference>,
+    /// The mission's geographic frame, when it has one: the file then also
+    /// holds a `foxglove.LocationFix` for each pose, and the chart and the
+    /// route as `foxglove.GeoJSON` (Foxglove's Map panel).
+    pub geo: Option<&'a LocalFrame>,
 }
 
 /// Why `mission.mcap` could not be written or read.
@@ -276,7 +276,12 @@ fn schema(title: &str, props: &[(&str, &str)]) -> Vec<u8> {
         .into_bytes()
 }
 
-/// The channels of a mission file, in the order they are declared.
+/// The top-level properties of `foxglove.SceneUpdate`.
+const SCENE_PROPS: &[(&str, &str)] = &[("deletions", "array"), ("entities", "array")];
+/// The top-level properties of `foxglove.GeoJSON`.
+const GEOJSON_PROPS: &[(&str, &str)] = &[("geojson", "string")];
+
+/// The channels of a mission file (`shore.mcap` uses the same ones).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Topic {
     /// `chart`: the water mask (`foxglove.Grid`).
@@ -303,30 +308,22 @@ pub enum Topic {
     Fix,
     /// `vehicle/route_geojson`: the route travelled (`foxglove.GeoJSON`).
     Route,
+    /// `chart/geojson`: land and waypoints (`foxglove.GeoJSON`).
+    ChartGeo,
 }
 
 impl Topic {
     /// The channel name below `/<vehicle>/`.
     pub fn name(self) -> &'static str {
-        match self {
-            Topic::Chart => "chart",
-            Topic::Bounds => "waypoints/bounds",
-            Topic::Waypoints => "waypoints",
-            Topic::Plan => "planner/plan",
-            Topic::Pose => "vehicle/pose",
-            Topic::Track => "vehicle/track",
-            Topic::Events => "events",
-            Topic::Status => "planner/status",
-            Topic::Progress => "mission/progress",
-            Topic::Latency => "planner/latency",
-            Topic::Fix => "vehicle/fix",
-            Topic::Route => "vehicle/route_geojson",
-        }
+        self.spec().0
     }
 
-    fn schema(self) -> Vec<u8> {
+    /// Topic name (after `/<vehicle>/`), schema name, and the schema's
+    /// top-level properties.
+    fn spec(self) -> (&'static str, &'static str, &'static [(&'static str, &'static str)]) {
         match self {
-            Topic::Chart => schema(
+            Topic::Chart => (
+                "chart",
                 "foxglove.Grid",
                 &[
                     ("timestamp", "object"),
@@ -340,14 +337,17 @@ impl Topic {
                     ("data", "string"),
                 ],
             ),
-            Topic::Bounds | Topic::Waypoints | Topic::Plan | Topic::Track => {
-                schema("foxglove.SceneUpdate", &[("deletions", "array"), ("entities", "array")])
-            }
-            Topic::Pose => schema(
+            Topic::Bounds => ("waypoints/bounds", "foxglove.SceneUpdate", SCENE_PROPS),
+            Topic::Waypoints => ("waypoints", "foxglove.SceneUpdate", SCENE_PROPS),
+            Topic::Plan => ("planner/plan", "foxglove.SceneUpdate", SCENE_PROPS),
+            Topic::Track => ("vehicle/track", "foxglove.SceneUpdate", SCENE_PROPS),
+            Topic::Pose => (
+                "vehicle/pose",
                 "foxglove.PoseInFrame",
                 &[("timestamp", "object"), ("frame_id", "string"), ("pose", "object")],
             ),
-            Topic::Events => schema(
+            Topic::Events => (
+                "events",
                 "foxglove.Log",
                 &[
                     ("timestamp", "object"),
@@ -358,7 +358,8 @@ impl Topic {
                     ("line", "integer"),
                 ],
             ),
-            Topic::Status => schema(
+            Topic::Status => (
+                "planner/status",
                 STATUS_SCHEMA,
                 &[
                     ("t", "number"),
@@ -375,7 +376,8 @@ impl Topic {
                     ("epoch", "integer"),
                 ],
             ),
-            Topic::Progress => schema(
+            Topic::Progress => (
+                "mission/progress",
                 PROGRESS_SCHEMA,
                 &[
                     ("t", "number"),
@@ -385,7 +387,8 @@ impl Topic {
                     ("time_left_s", "number"),
                 ],
             ),
-            Topic::Latency => schema(
+            Topic::Latency => (
+                "planner/latency",
                 LATENCY_SCHEMA,
                 &[
                     ("plans", "integer"),
@@ -394,7 +397,8 @@ impl Topic {
                     ("max_us", "integer"),
                 ],
             ),
-            Topic::Fix => schema(
+            Topic::Fix => (
+                "vehicle/fix",
                 "foxglove.LocationFix",
                 &[
                     ("timestamp", "object"),
@@ -406,33 +410,32 @@ impl Topic {
                     ("position_covariance_type", "integer"),
                 ],
             ),
-            Topic::Route => schema("foxglove.GeoJSON", &[("geojson", "string")]),
+            Topic::Route => ("vehicle/route_geojson", "foxglove.GeoJSON", GEOJSON_PROPS),
+            Topic::ChartGeo => ("chart/geojson", "foxglove.GeoJSON", GEOJSON_PROPS),
         }
-    }
-
-    /// The schema's title (its name in the file).
-    fn schema_name(self) -> String {
-        serde_json::from_slice::<Value>(&self.schema())
-            .ok()
-            .and_then(|v| v["title"].as_str().map(str::to_string))
-            .unwrap_or_default()
     }
 }
 
 /// One pose of the vehicle: mission time, position, heading (rad from east).
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct PoseAt {
+pub struct PoseAt {
     t: f64,
     p: Vec3,
     yaw: f64,
 }
 
-/// The vehicle's poses from its journal: where it started, each arrival,
-/// and each departure after a task (the journal records no positions in
-/// between). The heading points at the next position.
-fn poses(journal: &JournalSummary, world: &World) -> Vec<PoseAt> {
-    let mut track: Vec<(f64, Vec3)> = Vec::new();
-    for e in &journal.events {
+/// The vehicle's poses, built from its journal event by event: where it
+/// started, each arrival, and each departure after a task (the journal
+/// records no positions in between). The heading points at the next
+/// position.
+#[derive(Default)]
+pub struct PoseTrack {
+    track: Vec<(f64, Vec3)>,
+}
+
+impl PoseTrack {
+    /// Takes the next journal event.
+    pub fn push(&mut self, e: &JournalEvent, world: &World) {
         match *e {
             JournalEvent::Start {
                 t,
@@ -440,10 +443,10 @@ fn poses(journal: &JournalSummary, world: &World) -> Vec<PoseAt> {
                 resumed: false,
             } => {
                 if let Some(&p) = world.positions().get(node) {
-                    track.push((t, p));
+                    self.track.push((t, p));
                 }
             }
-            JournalEvent::Arrival { t, pos, .. } => track.push((
+            JournalEvent::Arrival { t, pos, .. } => self.track.push((
                 t,
                 Vec3 {
                     x: pos[0],
@@ -452,22 +455,27 @@ fn poses(journal: &JournalSummary, world: &World) -> Vec<PoseAt> {
                 },
             )),
             JournalEvent::Task { t, .. } | JournalEvent::Hold { t, .. } | JournalEvent::End { t, .. } => {
-                if let Some(&(_, p)) = track.last() {
-                    track.push((t, p));
+                if let Some(&(_, p)) = self.track.last() {
+                    self.track.push((t, p));
                 }
             }
             JournalEvent::Start { .. } | JournalEvent::Plan { .. } => {}
         }
     }
-    let mut out = Vec::with_capacity(track.len());
-    let mut yaw = 0.0;
-    for (k, &(t, p)) in track.iter().enumerate() {
-        if let Some(&(_, q)) = track[k + 1..].iter().find(|(_, q)| (q.x, q.y) != (p.x, p.y)) {
-            yaw = (q.y - p.y).atan2(q.x - p.x);
+
+    /// The poses, headings filled in.
+    pub fn finish(self) -> Vec<PoseAt> {
+        let track = self.track;
+        let mut out = Vec::with_capacity(track.len());
+        let mut yaw = 0.0;
+        for (k, &(t, p)) in track.iter().enumerate() {
+            if let Some(&(_, q)) = track[k + 1..].iter().find(|(_, q)| (q.x, q.y) != (p.x, p.y)) {
+                yaw = (q.y - p.y).atan2(q.x - p.x);
+            }
+            out.push(PoseAt { t, p, yaw });
         }
-        out.push(PoseAt { t, p, yaw });
+        out
     }
-    out
 }
 
 fn pose_json(p: Vec3, yaw: f64) -> Value {
@@ -480,8 +488,8 @@ pub fn pose_message(t_ns: u64, p: Vec3, yaw: f64) -> Value {
     json!({"timestamp": stamp(t_ns), "frame_id": FRAME, "pose": pose_json(p, yaw)})
 }
 
-/// A [`Topic::Plan`] message: the plan `replan` through `pts` (the first
-/// plan of a mission blue, later ones purple).
+/// A [`Topic::Plan`] message: plan `replan` through `pts` (a mission's first
+/// plan blue, later ones purple).
 pub fn plan_message(t_ns: u64, replan: u64, route: &[usize], pts: &[Vec3], first: bool) -> Value {
     let ids = route.iter().map(usize::to_string).collect::<Vec<_>>().join(" ");
     let meta = [("replan", replan.to_string()), ("route", ids)];
@@ -490,10 +498,7 @@ pub fn plan_message(t_ns: u64, replan: u64, route: &[usize], pts: &[Vec3], first
     } else {
         colour(0.6, 0.1, 0.7, 1.0)
     };
-    let plan = entity(t_ns, "plan", &meta, |e| {
-        e.insert("lines".into(), json!([line_json(pts, c)]));
-    });
-    scene(vec![plan])
+    scene(vec![lines_entity(t_ns, "plan", &meta, line_json(pts, c))])
 }
 
 /// The figures of one plan on [`Topic::Status`].
@@ -557,75 +562,6 @@ pub fn log_time_ns(t: f64) -> u64 {
     ns(t)
 }
 
-/// Writes JSON messages to MCAP channels `/<vehicle>/<topic>`, each channel
-/// declared with its schema before its first message.
-pub struct ChannelWriter<W: Write + Seek> {
-    writer: mcap::Writer<W>,
-    vehicle: String,
-    ids: BTreeMap<Topic, u16>,
-    sequence: BTreeMap<Topic, u32>,
-}
-
-impl<W: Write + Seek> ChannelWriter<W> {
-    /// A writer on `w` with `topics` declared now, in that order (the rest
-    /// when first written).
-    pub fn new(w: W, vehicle: &str, topics: &[Topic]) -> Result<Self, McapLogError> {
-        let writer = mcap::WriteOptions::new().compression(None).profile("").create(w)?;
-        let mut cw = Self {
-            writer,
-            vehicle: vehicle.to_string(),
-            ids: BTreeMap::new(),
-            sequence: BTreeMap::new(),
-        };
-        for &t in topics {
-            cw.channel(t)?;
-        }
-        Ok(cw)
-    }
-
-    fn channel(&mut self, topic: Topic) -> Result<u16, McapLogError> {
-        if let Some(&id) = self.ids.get(&topic) {
-            return Ok(id);
-        }
-        let schema_id = self
-            .writer
-            .add_schema(&topic.schema_name(), "jsonschema", &topic.schema())?;
-        let name = format!("/{}/{}", self.vehicle, topic.name());
-        let id = self.writer.add_channel(schema_id, &name, "json", &BTreeMap::new())?;
-        self.ids.insert(topic, id);
-        Ok(id)
-    }
-
-    /// Writes `data` on `topic` at log time `t_ns`.
-    pub fn write(&mut self, topic: Topic, t_ns: u64, data: &Value) -> Result<(), McapLogError> {
-        let channel_id = self.channel(topic)?;
-        let seq = self.sequence.entry(topic).or_insert(0);
-        *seq += 1;
-        let header = mcap::records::MessageHeader {
-            channel_id,
-            sequence: *seq,
-            log_time: t_ns,
-            publish_time: t_ns,
-        };
-        self.writer
-            .write_to_known_channel(&header, data.to_string().as_bytes())?;
-        Ok(())
-    }
-
-    /// Writes the summary and returns the sink.
-    pub fn finish(mut self) -> Result<W, McapLogError> {
-        self.writer.finish()?;
-        Ok(self.writer.into_inner())
-    }
-}
-
-/// A message waiting to be written, in log-time order.
-struct Pending {
-    t_ns: u64,
-    topic: Topic,
-    data: Value,
-}
-
 fn field<'v>(v: &'v Value, key: &str, line: usize) -> Result<&'v Value, McapLogError> {
     v.get(key).ok_or_else(|| McapLogError::BadLogLine {
         line,
@@ -652,47 +588,145 @@ fn level(v: &Value) -> u8 {
     }
 }
 
-/// Every message of the mission, sorted by log time (stable: same-time
-/// messages keep the order they were produced in).
-fn messages(rec: &MissionRecord) -> Result<Vec<Pending>, McapLogError> {
+/// Where the messages go, one at a time, in log-time order.
+trait Sink {
+    fn put(&mut self, t_ns: u64, topic: Topic, data: &Value) -> Result<(), McapLogError>;
+}
+
+/// A `foxglove.GeoJSON` message of `doc`.
+fn geojson_msg(doc: &impl std::fmt::Display) -> Value {
+    json!({"geojson": doc.to_string()})
+}
+
+/// The chart in lon/lat: the land polygons of a vector chart (a raster
+/// chart has none to give; its water shows as the grid) and the waypoints
+/// at their nominal positions, named as in the mission file.
+fn chart_geojson(world: &MissionWorld, frame: &LocalFrame) -> Value {
+    let lon_lat = |x: f64, y: f64| frame.to_geodetic(x, y).map(|p| json!([p.lon, p.lat])).ok();
+    let mut features = Vec::new();
+    if let Water::Land(land) = world.map() {
+        for rings in land.rings() {
+            let rings: Vec<Vec<Value>> = rings
+                .iter()
+                .map(|r| r.iter().filter_map(|&(x, y)| lon_lat(x, y)).collect())
+                .collect();
+            features.push(json!({"type": "Feature", "properties": {"name": "land"},
+                "geometry": {"type": "Polygon", "coordinates": rings}}));
+        }
+    }
+    let (wm, hm) = (world.map().width_m(), world.map().height_m());
+    let extent: Vec<Value> = [(0.0, 0.0), (wm, 0.0), (wm, hm), (0.0, hm), (0.0, 0.0)]
+        .iter()
+        .filter_map(|&(x, y)| lon_lat(x, y))
+        .collect();
+    features.push(json!({"type": "Feature", "properties": {"name": "chart extent"},
+        "geometry": {"type": "LineString", "coordinates": extent}}));
+    let w = world.world();
+    for (i, info) in world.waypoints().iter().enumerate() {
+        let p = w.nominal_positions()[i];
+        if let Some(at) = lon_lat(p.x, p.y) {
+            features.push(json!({"type": "Feature",
+                "properties": {"name": info.name, "id": i, "role": info.role.as_str(), "dynamic": w.is_dynamic(i)},
+                "geometry": {"type": "Point", "coordinates": at}}));
+        }
+    }
+    geojson_msg(&json!({"type": "FeatureCollection", "features": features}))
+}
+
+/// Emits the vehicle's poses in time order, interleaved with the log.
+struct PoseStream<'r> {
+    rec: &'r MissionRecord<'r>,
+    next: usize,
+    travelled: Vec<Vec3>,
+    /// Latest log time written, ns.
+    end: u64,
+}
+
+impl PoseStream<'_> {
+    /// Writes every pose before `t_ns` (a log line at the same time goes
+    /// first, as it was recorded first).
+    fn until(&mut self, t_ns: u64, sink: &mut impl Sink) -> Result<(), McapLogError> {
+        let rec = self.rec;
+        while let Some(p) = rec.poses.get(self.next).filter(|p| ns(p.t) < t_ns) {
+            let t_ns = ns(p.t);
+            self.end = self.end.max(t_ns);
+            self.next += 1;
+            sink.put(t_ns, Topic::Pose, &pose_message(t_ns, p.p, p.yaw))?;
+            self.travelled.push(p.p);
+            let travelled = lines_entity(
+                t_ns,
+                "travelled",
+                &[],
+                line_json(&self.travelled, colour(0.1, 0.6, 0.2, 1.0)),
+            );
+            sink.put(t_ns, Topic::Track, &scene(vec![travelled]))?;
+            let Some(frame) = rec.geo else { continue };
+            if let Ok(ll) = frame.to_geodetic(p.p.x, p.p.y) {
+                sink.put(
+                    t_ns,
+                    Topic::Fix,
+                    &json!({
+                        "timestamp": stamp(t_ns), "frame_id": FRAME, "latitude": ll.lat, "longitude": ll.lon,
+                        "altitude": -p.p.z, "position_covariance": vec![0.0; 9], "position_covariance_type": 0,
+                    }),
+                )?;
+            }
+            if self.next == rec.poses.len() {
+                let route = super::route_geojson::route_geojson(rec.world, rec.visits);
+                sink.put(t_ns, Topic::Route, &geojson_msg(&route))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A `foxglove.SceneEntity` holding one line.
+fn lines_entity(t_ns: u64, id: &str, metadata: &[(&str, String)], line: Value) -> Value {
+    entity(t_ns, id, metadata, |e| {
+        e.insert("lines".into(), json!([line]));
+    })
+}
+
+/// Every message of the mission, in log-time order, to `sink`: the world
+/// first, then each `mission.log` line as it is read, the vehicle's poses
+/// merged in by time, the latency summary last.
+fn emit(rec: &MissionRecord, log: impl BufRead, sink: &mut impl Sink) -> Result<(), McapLogError> {
     let mut world = rec.world.world().clone();
     let map = rec.world.map();
-    let mut out = vec![
-        Pending {
-            t_ns: 0,
-            topic: Topic::Chart,
-            data: chart_grid(map),
-        },
-        Pending {
-            t_ns: 0,
-            topic: Topic::Bounds,
-            data: bounds_scene(&world),
-        },
-        Pending {
-            t_ns: 0,
-            topic: Topic::Waypoints,
-            data: scene(vec![waypoints_scene(0, &world, 0)]),
-        },
-    ];
+    sink.put(0, Topic::Chart, &chart_grid(map))?;
+    sink.put(0, Topic::Bounds, &bounds_scene(&world))?;
+    sink.put(0, Topic::Waypoints, &scene(vec![waypoints_scene(0, &world, 0)]))?;
+    if let Some(frame) = rec.geo {
+        sink.put(0, Topic::ChartGeo, &chart_geojson(rec.world, frame))?;
+    }
+    let mut poses = PoseStream {
+        rec,
+        next: 0,
+        travelled: Vec::new(),
+        end: 0,
+    };
     let mut epoch = 0;
     let mut pending_trigger: Option<(String, f64)> = None;
     let mut plans = 0u64;
-    for (k, text) in rec.log.lines().enumerate() {
+    for (k, text) in log.lines().enumerate() {
         let line = k + 1;
+        let text = text?;
         if text.trim().is_empty() {
             continue;
         }
-        let v: Value = serde_json::from_str(text).map_err(|e| McapLogError::BadLogLine {
+        let v: Value = serde_json::from_str(&text).map_err(|e| McapLogError::BadLogLine {
             line,
             detail: e.to_string(),
         })?;
         let t = num(&v, "t", line)?;
         let t_ns = ns(t);
-        out.push(Pending {
+        poses.until(t_ns, sink)?;
+        poses.end = poses.end.max(t_ns);
+        sink.put(
             t_ns,
-            topic: Topic::Events,
-            data: log_message(t_ns, level(&v), text, "planner", "mission.log", line),
-        });
+            Topic::Events,
+            &log_message(t_ns, level(&v), &text, "planner", "mission.log", line),
+        )?;
         match field(&v, "event", line)?.as_str() {
             Some("sensor_update") => {
                 let e = num(&v, "epoch", line)? as u64;
@@ -700,11 +734,11 @@ fn messages(rec: &MissionRecord) -> Result<Vec<Pending>, McapLogError> {
                     epoch = e;
                     let mut rng = world.redraw_rng(epoch);
                     world.redraw_dynamic(&mut rng, map);
-                    out.push(Pending {
+                    sink.put(
                         t_ns,
-                        topic: Topic::Waypoints,
-                        data: scene(vec![waypoints_scene(t_ns, &world, epoch)]),
-                    });
+                        Topic::Waypoints,
+                        &scene(vec![waypoints_scene(t_ns, &world, epoch)]),
+                    )?;
                 }
             }
             Some("trigger") => {
@@ -725,11 +759,7 @@ fn messages(rec: &MissionRecord) -> Result<Vec<Pending>, McapLogError> {
                 }
                 let replan = num(&v, "replan", line)? as u64;
                 let pts: Vec<Vec3> = route.iter().map(|&n| pos[n]).collect();
-                out.push(Pending {
-                    t_ns,
-                    topic: Topic::Plan,
-                    data: plan_message(t_ns, replan, &route, &pts, plans == 0),
-                });
+                sink.put(t_ns, Topic::Plan, &plan_message(t_ns, replan, &route, &pts, plans == 0))?;
                 let (trigger, budget_s) = pending_trigger.take().unwrap_or_default();
                 let figures = PlanFigures {
                     t,
@@ -745,24 +775,20 @@ fn messages(rec: &MissionRecord) -> Result<Vec<Pending>, McapLogError> {
                     deadline_cut: v["deadline_cut"] == true,
                     epoch,
                 };
-                out.push(Pending {
-                    t_ns,
-                    topic: Topic::Status,
-                    data: figures.message(),
-                });
+                sink.put(t_ns, Topic::Status, &figures.message())?;
                 plans += 1;
             }
-            Some("arrival") => out.push(Pending {
+            Some("arrival") => sink.put(
                 t_ns,
-                topic: Topic::Progress,
-                data: progress_message(
+                Topic::Progress,
+                &progress_message(
                     t,
                     num(&v, "node", line)? as u64,
                     num(&v, "tasks", line)? as u64,
                     num(&v, "weight", line)?,
                     num(&v, "time_left_s", line)?,
                 ),
-            }),
+            )?,
             Some("finished" | "command") => {}
             other => {
                 return Err(McapLogError::BadLogLine {
@@ -772,84 +798,110 @@ fn messages(rec: &MissionRecord) -> Result<Vec<Pending>, McapLogError> {
             }
         }
     }
-    let track = poses(rec.journal, rec.world.world());
-    for (k, p) in track.iter().enumerate() {
-        let t_ns = ns(p.t);
-        out.push(Pending {
-            t_ns,
-            topic: Topic::Pose,
-            data: pose_message(t_ns, p.p, p.yaw),
-        });
-        let so_far: Vec<Vec3> = track[..=k].iter().map(|q| q.p).collect();
-        let travelled = entity(t_ns, "travelled", &[], |e| {
-            e.insert("lines".into(), json!([line_json(&so_far, colour(0.1, 0.6, 0.2, 1.0))]));
-        });
-        out.push(Pending {
-            t_ns,
-            topic: Topic::Track,
-            data: scene(vec![travelled]),
-        });
-        if let Some(geo) = rec.geo {
-            let (lat, lon) = geo.lat_lon(p.p.x, p.p.y);
-            out.push(Pending {
-                t_ns,
-                topic: Topic::Fix,
-                data: json!({
-                    "timestamp": stamp(t_ns), "frame_id": FRAME, "latitude": lat, "longitude": lon,
-                    "altitude": -p.p.z, "position_covariance": vec![0.0; 9], "position_covariance_type": 0,
-                }),
-            });
-        }
-    }
-    if let (Some(geo), Some(last)) = (rec.geo, track.last()) {
-        let coords: Vec<Value> = track
-            .iter()
-            .map(|q| {
-                let (lat, lon) = geo.lat_lon(q.p.x, q.p.y);
-                json!([lon, lat])
-            })
-            .collect();
-        let gj = json!({"type": "Feature", "properties": {"name": "route travelled"},
-            "geometry": {"type": "LineString", "coordinates": coords}});
-        out.push(Pending {
-            t_ns: ns(last.t),
-            topic: Topic::Route,
-            data: json!({"geojson": gj.to_string()}),
-        });
-    }
+    poses.until(u64::MAX, sink)?;
     if let Some((p50, p99, max)) = rec.latency_us {
-        let end = out.iter().map(|m| m.t_ns).max().unwrap_or(0);
-        out.push(Pending {
-            t_ns: end,
-            topic: Topic::Latency,
-            data: json!({"plans": plans, "p50_us": p50, "p99_us": p99, "max_us": max}),
-        });
+        sink.put(
+            poses.end,
+            Topic::Latency,
+            &json!({"plans": plans, "p50_us": p50, "p99_us": p99, "max_us": max}),
+        )?;
     }
-    out.sort_by_key(|m| m.t_ns);
-    Ok(out)
+    Ok(())
 }
 
 fn line_json(pts: &[Vec3], c: Value) -> Value {
     line(0, pts.iter().copied(), 3.0, c)
 }
 
-/// Writes the mission's MCAP file to `w`.
-pub fn write_to<W: Write + Seek>(rec: &MissionRecord, w: W) -> Result<W, McapLogError> {
-    let msgs = messages(rec)?;
-    let mut topics: Vec<Topic> = msgs.iter().map(|m| m.topic).collect();
-    topics.sort();
-    topics.dedup();
-    let mut writer = ChannelWriter::new(w, rec.vehicle, &topics)?;
-    for m in &msgs {
-        writer.write(m.topic, m.t_ns, &m.data)?;
+/// Writes JSON messages to MCAP channels `/<vehicle>/<topic>` as they come:
+/// a channel is declared with its schema when its first message arrives (or
+/// up front), nothing of the run is held but the writer's current chunk.
+pub struct ChannelWriter<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    vehicle: String,
+    /// Channel id and last sequence number, by topic.
+    channels: BTreeMap<Topic, (u16, u32)>,
+    buf: Vec<u8>,
+}
+
+impl<W: Write + Seek> ChannelWriter<W> {
+    /// A writer on `w` with `topics` declared now, in that order (the rest
+    /// when first written).
+    pub fn new(w: W, vehicle: &str, topics: &[Topic]) -> Result<Self, McapLogError> {
+        let mut cw = Self {
+            writer: mcap::WriteOptions::new().compression(None).profile("").create(w)?,
+            vehicle: vehicle.to_string(),
+            channels: BTreeMap::new(),
+            buf: Vec::new(),
+        };
+        for &t in topics {
+            cw.channel(t)?;
+        }
+        Ok(cw)
     }
+
+    fn channel(&mut self, topic: Topic) -> Result<&mut (u16, u32), McapLogError> {
+        let Self {
+            writer,
+            vehicle,
+            channels,
+            ..
+        } = self;
+        Ok(match channels.entry(topic) {
+            std::collections::btree_map::Entry::Occupied(o) => o.into_mut(),
+            std::collections::btree_map::Entry::Vacant(v) => {
+                let (name, schema_name, props) = topic.spec();
+                let schema_id = writer.add_schema(schema_name, "jsonschema", &schema(schema_name, props))?;
+                let id = writer.add_channel(schema_id, &format!("/{vehicle}/{name}"), "json", &BTreeMap::new())?;
+                v.insert((id, 0))
+            }
+        })
+    }
+
+    /// Writes `data` on `topic` at log time `t_ns`.
+    pub fn write(&mut self, topic: Topic, t_ns: u64, data: &Value) -> Result<(), McapLogError> {
+        let (channel_id, seq) = *self.channel(topic)?;
+        self.channels.insert(topic, (channel_id, seq + 1));
+        self.buf.clear();
+        serde_json::to_writer(&mut self.buf, data).map_err(|e| McapLogError::Io(e.into()))?;
+        let header = mcap::records::MessageHeader {
+            channel_id,
+            sequence: seq + 1,
+            log_time: t_ns,
+            publish_time: t_ns,
+        };
+        self.writer.write_to_known_channel(&header, &self.buf)?;
+        Ok(())
+    }
+
+    /// Writes the summary and returns the sink.
+    pub fn finish(mut self) -> Result<W, McapLogError> {
+        self.writer.finish()?;
+        Ok(self.writer.into_inner())
+    }
+}
+
+impl<W: Write + Seek> Sink for ChannelWriter<W> {
+    fn put(&mut self, t_ns: u64, topic: Topic, data: &Value) -> Result<(), McapLogError> {
+        self.write(topic, t_ns, data)
+    }
+}
+
+/// Writes the mission's MCAP file to `w`, reading `log` (the
+/// `mission.log` text) line by line.
+pub fn write_to<W: Write + Seek>(rec: &MissionRecord, log: impl BufRead, w: W) -> Result<W, McapLogError> {
+    let mut writer = ChannelWriter::new(w, rec.vehicle, &[])?;
+    emit(rec, log, &mut writer)?;
     writer.finish()
 }
 
-/// Writes `mission.mcap` at `path`.
-pub fn write(path: &Path, rec: &MissionRecord) -> Result<(), McapLogError> {
-    let bytes = write_to(rec, Cursor::new(Vec::new()))?.into_inner();
-    std::fs::write(path, bytes)?;
+/// Writes `mission.mcap` at `path`, streaming: `log` (`mission.log`) is
+/// read line by line and each message goes through a buffered file.
+pub fn write(path: &Path, rec: &MissionRecord, log: &Path) -> Result<(), McapLogError> {
+    let log = BufReader::new(File::open(log)?);
+    let file = BufWriter::new(File::create(path)?);
+    let mut file = write_to(rec, log, file)?;
+    file.flush()?;
     Ok(())
 }
 
@@ -875,6 +927,8 @@ pub struct McapSummary {
     pub plans: Vec<Vec<usize>>,
     /// Last vehicle pose: x, y, z (up), m, and heading, degrees from east.
     pub final_pose: Option<(f64, f64, f64, f64)>,
+    /// Last location fix: latitude, longitude, degrees (lat/lon missions).
+    pub final_fix: Option<(f64, f64)>,
     /// Outcome of the `finished` event, if logged.
     pub outcome: Option<String>,
 }
@@ -893,6 +947,7 @@ pub fn read_summary(bytes: &[u8]) -> Result<McapSummary, McapLogError> {
     let mut span: Option<(u64, u64)> = None;
     let mut plans = Vec::new();
     let mut final_pose = None;
+    let mut final_fix = None;
     let mut outcome = None;
     for m in mcap::MessageStream::new(bytes)? {
         let m = m?;
@@ -929,6 +984,12 @@ pub fn read_summary(bytes: &[u8]) -> Result<McapSummary, McapLogError> {
             };
             let yaw = 2.0 * f(&q["z"])?.atan2(f(&q["w"])?);
             final_pose = Some((f(&p["x"])?, f(&p["y"])?, f(&p["z"])?, yaw.to_degrees()));
+        } else if schema == "foxglove.LocationFix" {
+            let v = parse()?;
+            match (v["latitude"].as_f64(), v["longitude"].as_f64()) {
+                (Some(lat), Some(lon)) => final_fix = Some((lat, lon)),
+                _ => return Err(not_mission(&topic, "a fix without latitude and longitude")),
+            }
         } else if schema == "foxglove.Log" {
             let v = parse()?;
             if let Some(text) = v["message"].as_str()
@@ -945,6 +1006,7 @@ pub fn read_summary(bytes: &[u8]) -> Result<McapSummary, McapLogError> {
         span_s: span.map(|(a, b)| (s(a), s(b))),
         plans,
         final_pose,
+        final_fix,
         outcome,
     })
 }
@@ -979,6 +1041,10 @@ impl McapSummary {
             }
             None => o.push_str("final pose: none\n"),
         }
+        if let Some((lat, lon)) = self.final_fix {
+            let (ns, ew) = (if lat < 0.0 { 'S' } else { 'N' }, if lon < 0.0 { 'W' } else { 'E' });
+            let _ = writeln!(o, "final fix: {:.5}° {ns}, {:.5}° {ew}", lat.abs(), lon.abs());
+        }
         let _ = writeln!(o, "outcome: {}", self.outcome.as_deref().unwrap_or("not logged"));
         o
     }
@@ -987,8 +1053,10 @@ impl McapSummary {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use auv_messages::journal::JournalSummary;
     use auv_messages::msg::Outcome;
     use auv_world::load::{ScenarioArgs, load_world};
+    use std::io::Cursor;
 
     fn world() -> MissionWorld {
         load_world(&ScenarioArgs {
@@ -1053,23 +1121,87 @@ mod tests {
         (log, journal)
     }
 
-    fn bytes(rec: &MissionRecord) -> Vec<u8> {
-        write_to(rec, Cursor::new(Vec::new())).unwrap().into_inner()
+    /// The record of a reproducible mission of vehicle `auv1` in local metres.
+    fn record<'a>(w: &'a MissionWorld, poses: &'a [PoseAt], visits: &'a [Visit]) -> MissionRecord<'a> {
+        MissionRecord {
+            world: w,
+            poses,
+            visits,
+            vehicle: "auv1",
+            latency_us: None,
+            geo: None,
+        }
+    }
+
+    fn bytes(rec: &MissionRecord, log: &str) -> Vec<u8> {
+        write_to(rec, log.as_bytes(), Cursor::new(Vec::new()))
+            .unwrap()
+            .into_inner()
+    }
+
+    fn poses(journal: &JournalSummary, world: &World) -> Vec<PoseAt> {
+        let mut track = PoseTrack::default();
+        for e in &journal.events {
+            track.push(e, world);
+        }
+        track.finish()
+    }
+
+    /// The start and each arrival, as the mission's trace finds them.
+    fn visits(journal: &JournalSummary) -> Vec<Visit> {
+        journal
+            .events
+            .iter()
+            .filter_map(|e| match *e {
+                JournalEvent::Start { t, node, .. } => Some(Visit {
+                    t,
+                    node,
+                    at: (0.0, 0.0),
+                }),
+                JournalEvent::Arrival { t, node, pos, .. } => Some(Visit {
+                    t,
+                    node,
+                    at: (pos[0], pos[1]),
+                }),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Every message of `rec`, in the order they would be written.
+    fn messages(rec: &MissionRecord, log: &str) -> Result<Vec<Pending>, McapLogError> {
+        let mut out = Vec::new();
+        emit(rec, log.as_bytes(), &mut out)?;
+        Ok(out)
+    }
+
+    struct Pending {
+        t_ns: u64,
+        topic: Topic,
+        data: Value,
+    }
+
+    impl Sink for Vec<Pending> {
+        fn put(&mut self, t_ns: u64, topic: Topic, data: &Value) -> Result<(), McapLogError> {
+            self.push(Pending {
+                t_ns,
+                topic,
+                data: data.clone(),
+            });
+            Ok(())
+        }
     }
 
     #[test]
     fn the_file_reads_back_with_every_channel_and_the_same_plans_and_pose() {
         let w = world();
         let (log, journal) = records(&w);
+        let (track, visits) = (poses(&journal, w.world()), visits(&journal));
         let rec = MissionRecord {
-            world: &w,
-            log: &log,
-            journal: &journal,
             vehicle: "auv7",
-            latency_us: None,
-            geo: None,
+            ..record(&w, &track, &visits)
         };
-        let s = read_summary(&bytes(&rec)).unwrap();
+        let s = read_summary(&bytes(&rec, &log)).unwrap();
         let topics: Vec<&str> = s.channels.iter().map(|c| c.topic.as_str()).collect();
         for t in [
             "/auv7/chart",
@@ -1105,32 +1237,19 @@ mod tests {
     fn the_same_records_give_the_same_bytes() {
         let w = world();
         let (log, journal) = records(&w);
-        let rec = MissionRecord {
-            world: &w,
-            log: &log,
-            journal: &journal,
-            vehicle: "auv1",
-            latency_us: None,
-            geo: None,
-        };
-        assert_eq!(bytes(&rec), bytes(&rec));
+        let (track, visits) = (poses(&journal, w.world()), visits(&journal));
+        let rec = record(&w, &track, &visits);
+        assert_eq!(bytes(&rec, &log), bytes(&rec, &log));
     }
 
     #[test]
     fn messages_are_in_log_time_order_and_poses_head_for_the_next_point() {
         let w = world();
         let (log, journal) = records(&w);
-        let rec = MissionRecord {
-            world: &w,
-            log: &log,
-            journal: &journal,
-            vehicle: "auv1",
-            latency_us: None,
-            geo: None,
-        };
-        let msgs = messages(&rec).unwrap();
+        let (track, visits) = (poses(&journal, w.world()), visits(&journal));
+        let rec = record(&w, &track, &visits);
+        let msgs = messages(&rec, &log).unwrap();
         assert!(msgs.windows(2).all(|m| m[0].t_ns <= m[1].t_ns));
-        let track = poses(&journal, w.world());
         let (a, b) = (track[0].p, track[1].p);
         assert!((track[0].yaw - (b.y - a.y).atan2(b.x - a.x)).abs() < 1e-12);
         // The last pose keeps the heading it arrived with.
@@ -1153,57 +1272,69 @@ mod tests {
         assert!(water > 0 && water < cols * rows, "a chart has both water and land");
     }
 
-    struct Linear;
-    impl GeoReference for Linear {
-        fn lat_lon(&self, x_m: f64, y_m: f64) -> (f64, f64) {
-            (44.0 + y_m * 1e-5, -63.0 + x_m * 1e-5)
-        }
-    }
-
     #[test]
-    fn a_geographic_reference_adds_location_fixes_and_the_route_as_geojson() {
+    fn a_geographic_frame_adds_location_fixes_and_the_chart_and_route_as_geojson() {
         let w = world();
+        let frame = w.frame().expect("the embedded chart has an origin");
         let (log, journal) = records(&w);
+        let (track, visits) = (poses(&journal, w.world()), visits(&journal));
         let rec = MissionRecord {
-            world: &w,
-            log: &log,
-            journal: &journal,
-            vehicle: "auv1",
             latency_us: Some((10, 20, 30)),
-            geo: Some(&Linear),
+            geo: Some(frame),
+            ..record(&w, &track, &visits)
         };
-        let msgs = messages(&rec).unwrap();
-        let fixes = msgs.iter().filter(|m| m.topic == Topic::Fix).count();
-        assert_eq!(fixes, poses(&journal, w.world()).len());
-        let route = msgs.iter().find(|m| m.topic == Topic::Route).unwrap();
-        let gj: Value = serde_json::from_str(route.data["geojson"].as_str().unwrap()).unwrap();
-        assert_eq!(gj["geometry"]["coordinates"].as_array().unwrap().len(), fixes);
+        let msgs = messages(&rec, &log).unwrap();
+        assert!(msgs.windows(2).all(|m| m[0].t_ns <= m[1].t_ns));
+        let fixes: Vec<&Pending> = msgs.iter().filter(|m| m.topic == Topic::Fix).collect();
+        assert_eq!(fixes.len(), track.len());
+        // Each fix is its pose converted by the frame, independently of the writer.
+        for (f, p) in fixes.iter().zip(&track) {
+            let ll = frame.to_geodetic(p.p.x, p.p.y).unwrap();
+            assert_eq!(
+                (f.data["latitude"].as_f64(), f.data["longitude"].as_f64()),
+                (Some(ll.lat), Some(ll.lon))
+            );
+            assert_eq!(f.t_ns, ns(p.t));
+        }
+        let route: Vec<&Pending> = msgs.iter().filter(|m| m.topic == Topic::Route).collect();
+        assert_eq!(route.len(), 1, "the route once, when it is complete");
+        let gj: Value = serde_json::from_str(route[0].data["geojson"].as_str().unwrap()).unwrap();
+        let line = &gj["features"][0]["geometry"];
+        assert_eq!(line["type"], "LineString");
+        assert_eq!(line["coordinates"].as_array().unwrap().len(), visits.len());
+        let chart: Vec<&Pending> = msgs.iter().filter(|m| m.topic == Topic::ChartGeo).collect();
+        assert_eq!((chart.len(), chart[0].t_ns), (1, 0));
+        let gj: Value = serde_json::from_str(chart[0].data["geojson"].as_str().unwrap()).unwrap();
+        let points = gj["features"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|f| f["geometry"]["type"] == "Point")
+            .count();
+        assert_eq!(points, w.world().n(), "every waypoint on the map");
+        let summary = read_summary(&bytes(&rec, &log)).unwrap();
+        let last = frame
+            .to_geodetic(track[track.len() - 1].p.x, track[track.len() - 1].p.y)
+            .unwrap();
+        assert_eq!(summary.final_fix, Some((last.lat, last.lon)));
+        assert!(summary.render().contains("final fix: "), "{}", summary.render());
         let lat = msgs.iter().find(|m| m.topic == Topic::Latency).unwrap();
         assert_eq!(lat.data["p99_us"], 20);
         assert_eq!(lat.data["plans"], 2);
+        assert_eq!(lat.t_ns, msgs.iter().map(|m| m.t_ns).max().unwrap());
     }
 
     #[test]
     fn a_bad_log_line_is_named() {
         let w = world();
-        let journal = JournalSummary::default();
         let log = "{\"event\":\"plan\",\"t\":1.0,\"replan\":0,\"route\":[0,999]}\n";
-        let rec = MissionRecord {
-            world: &w,
-            log,
-            journal: &journal,
-            vehicle: "auv1",
-            latency_us: None,
-            geo: None,
-        };
-        let e = write_to(&rec, Cursor::new(Vec::new())).unwrap_err().to_string();
+        let rec = record(&w, &[], &[]);
+        let e = write_to(&rec, log.as_bytes(), Cursor::new(Vec::new()))
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("mission.log line 1: plan visits waypoint 999"), "{e}");
-        let rec = MissionRecord {
-            log: "not json\n",
-            ..rec
-        };
         assert!(
-            write_to(&rec, Cursor::new(Vec::new()))
+            write_to(&rec, "not json\n".as_bytes(), Cursor::new(Vec::new()))
                 .unwrap_err()
                 .to_string()
                 .starts_with("mission.log line 1:")
@@ -1214,15 +1345,9 @@ mod tests {
     fn truncated_and_foreign_files_are_errors() {
         let w = world();
         let (log, journal) = records(&w);
-        let rec = MissionRecord {
-            world: &w,
-            log: &log,
-            journal: &journal,
-            vehicle: "auv1",
-            latency_us: None,
-            geo: None,
-        };
-        let b = bytes(&rec);
+        let (track, visits) = (poses(&journal, w.world()), visits(&journal));
+        let rec = record(&w, &track, &visits);
+        let b = bytes(&rec, &log);
         for cut in [0, 4, b.len() / 3, b.len() - 1] {
             assert!(
                 read_summary(&b[..cut]).is_err(),

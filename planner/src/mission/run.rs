@@ -16,7 +16,9 @@ use std::process::ExitCode;
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use super::external::{ExternalArgs, VehicleFigures, announce, wait_for_outside_nodes};
+use super::mcap_log::{PoseAt, PoseTrack};
 use super::report::Report;
+use super::route_geojson::Visit;
 use super::stale::{RunMark, clean_stale_runs};
 use super::supervise::{Announced, FaultReport, PlannerTotals};
 use super::supervisor::{SupervisionReport, SupervisorArgs, supervise};
@@ -168,9 +170,15 @@ fn fresh_out_dir(seed: u64) -> PathBuf {
     p
 }
 
-/// What the plot shows of the run, read back from the vehicle's journal.
+/// What the plot, `route.geojson` and `mission.mcap` show of the run, read
+/// back from the vehicle's journal in one pass.
 #[derive(Default)]
 pub(super) struct Trace {
+    /// Where the vehicle was, in order: the start (at its nominal
+    /// position), then every arrival.
+    visits: Vec<Visit>,
+    /// The vehicle's poses over time.
+    poses: Vec<PoseAt>,
     arrivals: Vec<(f64, f64)>,
     /// Where re-plans were accepted: at the waypoint the vehicle last reached.
     replans_at: Vec<(f64, f64)>,
@@ -185,17 +193,33 @@ pub(super) struct Trace {
 impl Trace {
     /// The trace of `journal`; `last_epoch`: the latest snapshot epoch seen
     /// (the plot draws the waypoints where they were last reported).
-    pub(super) fn from_journal(journal: &JournalSummary, last_epoch: u64) -> Self {
+    pub(super) fn from_journal(journal: &JournalSummary, world: &MissionWorld, last_epoch: u64) -> Self {
         let mut t = Self {
             last_epoch,
             ..Self::default()
         };
+        let w = world.world();
+        let mut poses = PoseTrack::default();
         let mut here: Option<(f64, f64)> = None;
         for e in &journal.events {
+            poses.push(e, w);
             match e {
-                JournalEvent::Arrival { pos, .. } => {
+                JournalEvent::Start { t: at, node, .. } if t.visits.is_empty() => {
+                    let p = w.nominal_positions().get(*node).copied().unwrap_or_default();
+                    t.visits.push(Visit {
+                        t: *at,
+                        node: *node,
+                        at: (p.x, p.y),
+                    });
+                }
+                JournalEvent::Arrival { t: at, node, pos, .. } => {
                     t.arrivals.push((pos[0], pos[1]));
                     here = Some((pos[0], pos[1]));
+                    t.visits.push(Visit {
+                        t: *at,
+                        node: *node,
+                        at: (pos[0], pos[1]),
+                    });
                 }
                 JournalEvent::Plan { route, .. } => {
                     if t.first_plan.is_empty() {
@@ -215,6 +239,7 @@ impl Trace {
                 _ => {}
             }
         }
+        t.poses = poses.finish();
         t
     }
 }
@@ -230,13 +255,7 @@ fn changes_route(old: &[usize], new: &[usize]) -> bool {
 }
 
 /// Draws `mission.svg` and `mission.png` (see [`super::picture`]).
-fn plot(
-    stem: &Path,
-    world: &mut MissionWorld,
-    trace: &Trace,
-    visits: &[super::route_geojson::Visit],
-    report: &Report,
-) -> Result<(), MissionError> {
+fn plot(stem: &Path, world: &mut MissionWorld, trace: &Trace, report: &Report) -> Result<(), MissionError> {
     use super::picture::{PicDrift, PicKind, PicWaypoint, Picture};
     let start = world.snapshot();
     let w = world.world().clone();
@@ -322,7 +341,7 @@ fn plot(
         waypoints,
         drifts,
         first_plan,
-        travelled: visits.iter().map(|v| (v.at, v.t)).collect(),
+        travelled: trace.visits.iter().map(|v| (v.at, v.t)).collect(),
         changes: trace.changed_at.clone(),
         budget_s: report.time_available_s,
         summary,
@@ -338,7 +357,10 @@ pub(super) struct RunOut {
     pub(super) last_state: Option<VehicleState>,
     /// The vehicle's journal records the end of the mission.
     pub(super) finished: bool,
-    pub(super) trace: Trace,
+    /// The vehicle's journal as the run left it.
+    pub(super) journal: JournalSummary,
+    /// The latest snapshot epoch seen.
+    pub(super) last_epoch: u64,
     pub(super) faults: Option<FaultReport>,
     pub(super) supervision: SupervisionReport,
     /// What the vehicle announced on the wire, to check the journal against.
@@ -477,8 +499,8 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let run = run?;
     let last = run.last_state;
     // What happened is what the vehicle's journal says.
-    let journal = JournalSummary::read(&journal_path).map_err(|e| MissionError::Child(e.to_string()))?;
-    let figures = VehicleFigures::of(&journal, last.as_ref(), run.finished);
+    let journal = &run.journal;
+    let figures = VehicleFigures::of(journal, last.as_ref(), run.finished);
     let outcome = figures.outcome;
     let reason = match outcome {
         Outcome::GoalReached => None,
@@ -497,7 +519,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let stale_plans = last.map_or(0, |s| s.stale_plans);
     let rejected_vehicle = RejectCounters(last.map_or([0; auv_messages::msg::REJECT_KINDS], |s| s.rejected));
     let c = run.totals;
-    let trace = run.trace;
+    let trace = Trace::from_journal(journal, &world, run.last_epoch);
     let report = Report {
         outcome,
         reason,
@@ -550,39 +572,11 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let text = serde_json::to_string_pretty(&report_json).unwrap_or_default();
     std::fs::write(&report_path, text + "\n").map_err(|e| io_err(&report_path, e))?;
     let geojson_path = out.join("route.geojson");
-    let visits = journal_visits(&journal, &world);
-    let collection = super::route_geojson::route_geojson(&world, &visits);
+    let collection = super::route_geojson::route_geojson(&world, &trace.visits);
     std::fs::write(&geojson_path, collection.to_string() + "\n").map_err(|e| io_err(&geojson_path, e))?;
-    write_mcap(&out, &world, &journal, a, report.latency_us)?;
-    plot(&out.join("mission"), &mut world, &trace, &visits, &report)?;
+    write_mcap(&out, &world, &trace, a, report.latency_us)?;
+    plot(&out.join("mission"), &mut world, &trace, &report)?;
     Ok((report, out))
-}
-
-/// Where the vehicle was, in order, from its journal: the start (at its
-/// nominal position), then every arrival.
-fn journal_visits(journal: &JournalSummary, world: &MissionWorld) -> Vec<super::route_geojson::Visit> {
-    use super::route_geojson::Visit;
-    let w = world.world();
-    let mut visits = Vec::new();
-    for e in &journal.events {
-        match e {
-            JournalEvent::Start { t, node, .. } if visits.is_empty() => {
-                let p = w.nominal_positions().get(*node).copied().unwrap_or_default();
-                visits.push(Visit {
-                    t: *t,
-                    node: *node,
-                    at: (p.x, p.y),
-                });
-            }
-            JournalEvent::Arrival { t, node, pos, .. } => visits.push(Visit {
-                t: *t,
-                node: *node,
-                at: (pos[0], pos[1]),
-            }),
-            _ => {}
-        }
-    }
-    visits
 }
 
 /// Writes `mission.mcap` (see [`super::mcap_log`]) from what the run
@@ -590,22 +584,20 @@ fn journal_visits(journal: &JournalSummary, world: &MissionWorld) -> Vec<super::
 fn write_mcap(
     out: &Path,
     world: &MissionWorld,
-    journal: &JournalSummary,
+    trace: &Trace,
     a: &MissionArgs,
     latency_us: (u64, u64, u64),
 ) -> Result<(), MissionError> {
-    let log_path = out.join("mission.log");
-    let log = std::fs::read_to_string(&log_path).map_err(|e| io_err(&log_path, e))?;
     let path = out.join("mission.mcap");
     let record = super::mcap_log::MissionRecord {
         world,
-        log: &log,
-        journal,
+        poses: &trace.poses,
+        visits: &trace.visits,
         vehicle: &a.vehicle,
         latency_us: (!a.lockstep).then_some(latency_us),
-        geo: None,
+        geo: world.frame(),
     };
-    super::mcap_log::write(&path, &record).map_err(|e| io_err(&path, e))
+    super::mcap_log::write(&path, &record, &out.join("mission.log")).map_err(|e| io_err(&path, e))
 }
 
 fn check_shore_endpoint(ep: &str) -> Result<(), MissionError> {

@@ -34,7 +34,7 @@ use super::child::Kid;
 use super::restart::{
     DEFAULT_BACKOFF_MS, DEFAULT_MAX_RESTARTS, DEFAULT_WINDOW_S, RestartBudget, RestartPolicy, Verdict,
 };
-use super::run::{Launch, MissionArgs, MissionError, RunOut, Trace, io_err, sibling_binary};
+use super::run::{Launch, MissionArgs, MissionError, RunOut, io_err, sibling_binary};
 use super::supervise::{FaultKind, FaultReport, LATEST_INJECTION, LivenessEvent, Monitor, Proc, plan_faults};
 use auv_messages::journal::{Journal, JournalEvent, JournalSummary};
 use auv_messages::msg::Outcome;
@@ -690,7 +690,8 @@ pub(super) fn supervise(
         allocator_installed: true,
         finished: journal.outcome().is_some_and(|o| o != Outcome::Aborted),
         last_state,
-        trace: Trace::from_journal(&journal, last_epoch),
+        journal,
+        last_epoch,
         faults: Some(report),
         supervision: sup,
         announced,

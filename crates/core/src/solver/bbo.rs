@@ -78,9 +78,8 @@ const WARM_NOISE_FRACTION: f64 = 0.1;
 /// A BBO solver with every buffer allocated up front.
 pub struct Bbo {
     settings: BboSettings,
-    /// Two decoders, so habitats decode in pairs.
+    /// Decodes the changed habitats as one stream.
     decoder: Decoder,
-    decoder_b: Decoder,
     lanes: LaneRng,
     n: usize,
     stride: usize,
@@ -103,8 +102,6 @@ pub struct Bbo {
     mutate_below: Vec<u32>,
     /// Random words for the habitat being changed (two per dimension).
     words: Vec<u64>,
-    scratch: Route,
-    scratch_b: Route,
     best: Route,
     best_eval: RouteEval,
 }
@@ -131,7 +128,6 @@ impl Bbo {
         Self {
             settings,
             decoder: Decoder::new(),
-            decoder_b: Decoder::new(),
             lanes: LaneRng::new(),
             n: 0,
             stride: 0,
@@ -145,8 +141,6 @@ impl Bbo {
             immigrate_below,
             mutate_below,
             words: vec![0; 2 * MAX_NODES],
-            scratch: Route::new(),
-            scratch_b: Route::new(),
             best: Route::new(),
             best_eval: RouteEval::default(),
         }
@@ -157,38 +151,34 @@ impl Bbo {
         &self.settings
     }
 
-    /// Decodes habitat `h`, records its figures, and updates the
-    /// best-so-far on strict improvement.
-    fn evaluate(&mut self, problem: &Problem, h: usize) {
-        let row = h * self.stride..(h + 1) * self.stride;
-        let e = self.decoder.decode(problem, &self.pop[row], &mut self.scratch);
-        self.eval[h] = e;
-        self.rank_key[h] = (problem.score(&e), e.time_s);
-        if problem.better(&e, &self.best_eval) {
-            self.best = self.scratch;
-            self.best_eval = e;
-        }
-    }
-
-    /// [`Bbo::evaluate`] for habitats `a` then `b`, decoded together.
-    fn evaluate_pair(&mut self, problem: &Problem, a: usize, b: usize) {
-        let s = self.stride;
-        let (ea, eb) = self.decoder.decode_pair(
-            &mut self.decoder_b,
+    /// Decodes habitats `order[from..]` (`ranked`) or all habitats (not
+    /// `ranked`) as one stream, records their figures, and updates the
+    /// best-so-far on strict improvement as each walk finishes.
+    fn evaluate(&mut self, problem: &Problem, ranked: bool, from: usize) {
+        let stride = self.stride;
+        let habitat = |i: usize| if ranked { self.order[from + i] } else { i };
+        let count = if ranked {
+            self.settings.habitats.saturating_sub(from)
+        } else {
+            self.settings.habitats
+        };
+        let pop = &self.pop;
+        let (eval, rank_key) = (&mut self.eval, &mut self.rank_key);
+        let (best, best_eval) = (&mut self.best, &mut self.best_eval);
+        self.decoder.decode_stream(
             problem,
-            &self.pop[a * s..(a + 1) * s],
-            &self.pop[b * s..(b + 1) * s],
-            &mut self.scratch,
-            &mut self.scratch_b,
+            count,
+            &|i| &pop[habitat(i) * stride..(habitat(i) + 1) * stride],
+            &mut |i, route, e| {
+                let h = habitat(i);
+                eval[h] = e;
+                rank_key[h] = (problem.score(&e), e.time_s);
+                if problem.better(&e, best_eval) {
+                    *best = *route;
+                    *best_eval = e;
+                }
+            },
         );
-        for (h, e, second) in [(a, ea, false), (b, eb, true)] {
-            self.eval[h] = e;
-            self.rank_key[h] = (problem.score(&e), e.time_s);
-            if problem.better(&e, &self.best_eval) {
-                self.best = if second { self.scratch_b } else { self.scratch };
-                self.best_eval = e;
-            }
-        }
     }
 
     /// Sorts `order` best first under a total order.
@@ -291,14 +281,7 @@ impl Solver for Bbo {
             warm_eval = problem.evaluate(route);
         }
         self.best_eval = super::WORST;
-        let mut h = 0;
-        while h + 1 < habitats {
-            self.evaluate_pair(problem, h, h + 1);
-            h += 2;
-        }
-        if h < habitats {
-            self.evaluate(problem, h);
-        }
+        self.evaluate(problem, false, 0);
         if let (Some(route), Some(e)) = (warm, warm_eval)
             && problem.better(&e, &self.best_eval)
         {
@@ -354,18 +337,8 @@ impl Solver for Bbo {
                 };
             }
         }
-        // Decode the changed habitats two at a time (see
-        // `Decoder::decode_pair`), taking results in rank order.
-        let mut r = self.settings.elites;
-        while r + 1 < habitats {
-            let (ha, hb) = (self.order[r], self.order[r + 1]);
-            self.evaluate_pair(problem, ha, hb);
-            r += 2;
-        }
-        if r < habitats {
-            let h = self.order[r];
-            self.evaluate(problem, h);
-        }
+        // Decode the changed habitats (the non-elite ranks) as one stream.
+        self.evaluate(problem, true, self.settings.elites);
         self.rank();
         true
     }

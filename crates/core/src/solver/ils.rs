@@ -196,24 +196,43 @@ impl Moves {
         let mut best = (f64::NEG_INFINITY, 0u8, 0.0);
         for k in 0..route.len() - 1 {
             let (a, b) = (route.get(k), route.get(k + 1));
-            if !(nu.contains(a) && nu.contains(b)) {
-                continue;
-            }
-            let dt = p.time_s(a, u) + p.time_s(u, b) - p.time_s(a, b);
-            if time_s + dt > limit {
-                continue;
-            }
-            let dw = p.gain(a, u) + p.gain(u, b) - p.gain(a, b);
-            let dr = p.risk_ratio(a, u) + p.risk_ratio(u, b) - p.risk_ratio(a, b);
-            if v.delta(dt, dw, dr) <= 0.0 {
-                continue;
-            }
-            let r = v.noisy_insertion_ratio(dt, dw, dr, noise);
-            if r > best.0 {
+            if let Some((r, dt)) = Self::insertion(p, v, nu, u, (a, b), noise, time_s, limit)
+                && r > best.0
+            {
                 best = (r, a as u8, dt);
             }
         }
         best
+    }
+
+    /// Inserting `u` (neighbours `nu`) into the edge `a`–`b` of a route of
+    /// `time_s`: its noisy value ratio and added time, s, when it fits in
+    /// `limit` and gains; `None` otherwise.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn insertion(
+        p: &Problem,
+        v: &Value,
+        nu: NodeSet,
+        u: usize,
+        (a, b): (usize, usize),
+        noise: f64,
+        time_s: f64,
+        limit: f64,
+    ) -> Option<(f64, f64)> {
+        if !(nu.contains(a) && nu.contains(b)) {
+            return None;
+        }
+        let dt = p.time_s(a, u) + p.time_s(u, b) - p.time_s(a, b);
+        if time_s + dt > limit {
+            return None;
+        }
+        let dw = p.gain(a, u) + p.gain(u, b) - p.gain(a, b);
+        let dr = p.risk_ratio(a, u) + p.risk_ratio(u, b) - p.risk_ratio(a, b);
+        if v.delta(dt, dw, dr) <= 0.0 {
+            return None;
+        }
+        Some((v.noisy_insertion_ratio(dt, dw, dr, noise), dt))
     }
 
     /// Greedy insertion: while some free node (not on the route, not
@@ -292,20 +311,9 @@ impl Moves {
                 }
                 let nu = p.neighbours(u);
                 for (x, y) in [(a, pick), (pick, b)] {
-                    if !(nu.contains(x) && nu.contains(y)) {
-                        continue;
-                    }
-                    let dt = p.time_s(x, u) + p.time_s(u, y) - p.time_s(x, y);
-                    if time_s + dt > limit {
-                        continue;
-                    }
-                    let dw = p.gain(x, u) + p.gain(u, y) - p.gain(x, y);
-                    let dr = p.risk_ratio(x, u) + p.risk_ratio(u, y) - p.risk_ratio(x, y);
-                    if v.delta(dt, dw, dr) <= 0.0 {
-                        continue;
-                    }
-                    let r = v.noisy_insertion_ratio(dt, dw, dr, self.noise[u]);
-                    if r > self.ratio[u] {
+                    if let Some((r, dt)) = Self::insertion(p, v, nu, u, (x, y), self.noise[u], time_s, limit)
+                        && r > self.ratio[u]
+                    {
                         (self.ratio[u], self.after[u], self.dt[u]) = (r, x as u8, dt);
                     }
                 }
@@ -433,6 +441,13 @@ mod tests {
         out
     }
 
+    /// The route start → goal and its figures, when it is feasible.
+    fn direct_route(p: &Problem) -> Option<(Route, RouteEval)> {
+        let r = Route::from_slice(&[p.start(), p.goal()])?;
+        let e = p.evaluate(&r)?;
+        e.feasible.then_some((r, e))
+    }
+
     #[test]
     fn moves_keep_routes_valid_feasible_and_their_figures_exact() {
         let mut m = Moves::new();
@@ -441,15 +456,9 @@ mod tests {
         for p in problems() {
             let v = Value::of(&p);
             m.set_objective(&p);
-            let Some(mut r) = Route::from_slice(&[p.start(), p.goal()]) else {
+            let Some((mut r, mut e)) = direct_route(&p) else {
                 continue;
             };
-            let Some(mut e) = p.evaluate(&r) else {
-                continue;
-            };
-            if !e.feasible {
-                continue;
-            }
             for round in 0..20 {
                 let before = e;
                 filled += m.fill(&p, &mut r, &mut e, NodeSet::EMPTY, 0.3, &mut rng);
@@ -482,15 +491,9 @@ mod tests {
         for p in problems() {
             let v = Value::of(&p);
             m.set_objective(&p);
-            let Some(mut r) = Route::from_slice(&[p.start(), p.goal()]) else {
+            let Some((mut r, mut e)) = direct_route(&p) else {
                 continue;
             };
-            let Some(mut e) = p.evaluate(&r) else {
-                continue;
-            };
-            if !e.feasible {
-                continue;
-            }
             m.fill(&p, &mut r, &mut e, NodeSet::EMPTY, 0.5, &mut rng);
             m.shorten(&p, &mut r, &mut e, 100_000, 3);
             let ids = r.to_vec();

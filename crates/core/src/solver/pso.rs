@@ -35,7 +35,11 @@
 //!   the order of priorities, and a wall at the paper's range keeps the
 //!   encoding the paper's; zeroing the velocity stops particles grinding
 //!   against the wall for many iterations.
-//! - **Initial velocities** uniform in [−v_max, v_max].
+//! - **Initial velocities** uniform in [−v_max, v_max] (v_max at most the
+//!   range for this draw, so an unclamped swarm starts finite).
+//! - Both the clamp ([`PsoSettings::velocity_clamp`]) and the wall rule
+//!   ([`PsoSettings::walls`]) are settings, so experiments can vary them;
+//!   the defaults are the choices above.
 //! - **Warm start.** A tenth of the swarm (15 of 150, at least one particle)
 //!   starts near the warm route: particle 0 exactly on a vector that
 //!   decodes to it (priorities falling along the route from P_max, every
@@ -43,10 +47,14 @@
 //!   range) noise per dimension. The warm route is also evaluated directly,
 //!   so a warm solve never returns anything worse than it.
 //! - **Single precision.** Positions, velocities and bests are `f32`: the
-//!   decoder only compares priorities, `f32` resolves ~1e-5 on this range,
-//!   and twice the SIMD width halves the update's cost. The
-//!   decoder widens `f32` exactly, so results are still exact functions of
-//!   the seed.
+//!   decoder only compares priorities (as `f32`, at 16 bits of fraction),
+//!   and twice the SIMD width halves the update's cost. Results are still
+//!   exact functions of the seed, the same on every SIMD level.
+//! - **Synchronous, streamed decode.** After the whole swarm is updated,
+//!   it is decoded as one stream (`Decoder::decode_stream`, eight walks in
+//!   flight) and each particle's result is taken as its walk finishes:
+//!   personal best, then the best-so-far on strict improvement. The
+//!   finishing order is a function of the positions alone.
 //! - r1 and r2 come from sixteen interleaved xoshiro256++ lanes seeded from the
 //!   caller's `PlannerRng` (see `lanes.rs`), 24 bits each (one 64-bit word
 //!   per dimension).
@@ -73,6 +81,23 @@ pub struct PsoSettings {
     pub inertia_start: f64,
     /// Inertia at the last iteration (paper: 0.5).
     pub inertia_end: f64,
+    /// Largest velocity per dimension as a fraction of the priority range
+    /// (our choice, [`VELOCITY_CLAMP_FRACTION`]; `f64::INFINITY`: no clamp).
+    pub velocity_clamp: f64,
+    /// What a particle leaving the priority range does (our choice,
+    /// [`Walls::Absorb`]).
+    pub walls: Walls,
+}
+
+/// The rule at the edges of the priority range (the paper is silent).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Walls {
+    /// Stop on the bound with zero velocity in that dimension (default).
+    Absorb,
+    /// Stop on the bound, keep the velocity.
+    Clamp,
+    /// No walls: positions may leave the range (decoding only compares them).
+    Free,
 }
 
 impl PsoSettings {
@@ -85,6 +110,8 @@ impl PsoSettings {
             c2: 2.5,
             inertia_start: 1.4,
             inertia_end: 0.5,
+            velocity_clamp: VELOCITY_CLAMP_FRACTION,
+            walls: Walls::Absorb,
         }
     }
 }
@@ -132,9 +159,8 @@ pub(crate) fn unit24(u: u64) -> f32 {
 /// A PSO solver with every buffer allocated up front.
 pub struct Pso {
     settings: PsoSettings,
-    /// Two decoders, so particles decode in pairs.
+    /// Decodes the swarm as one stream.
     decoder: Decoder,
-    decoder_b: Decoder,
     lanes: LaneRng,
     /// Node count of the current problem and its padded row length.
     n: usize,
@@ -149,9 +175,6 @@ pub struct Pso {
     gbest: Vec<f32>,
     /// Random words for the row being updated (one per dimension).
     bits: Vec<u64>,
-    /// Decoding targets for the particle pair in hand.
-    scratch: Route,
-    scratch_b: Route,
     best: Route,
     best_eval: RouteEval,
     /// Particle whose personal best is `best` (its position is `gbest`).
@@ -172,7 +195,6 @@ impl Pso {
         Self {
             settings,
             decoder: Decoder::new(),
-            decoder_b: Decoder::new(),
             lanes: LaneRng::new(),
             n: 0,
             stride: 0,
@@ -182,8 +204,6 @@ impl Pso {
             pbest_eval: vec![RouteEval::default(); settings.particles],
             gbest: vec![0.0; MAX_NODES],
             bits: vec![0; MAX_NODES],
-            scratch: Route::new(),
-            scratch_b: Route::new(),
             best: Route::new(),
             best_eval: RouteEval::default(),
             best_particle: 0,
@@ -209,54 +229,8 @@ impl Pso {
     }
 
     /// Largest speed per dimension.
-    fn v_max() -> f32 {
-        (VELOCITY_CLAMP_FRACTION * (PRIORITY_MAX - PRIORITY_MIN)) as f32
-    }
-
-    /// Decodes particles `i` and `i + 1` together (see
-    /// [`Decoder::decode_pair`]), then takes their results in order.
-    #[inline(always)]
-    fn evaluate_pair(&mut self, problem: &Problem, i: usize) -> bool {
-        let s = self.stride;
-        let (first, second) = self.x[i * s..(i + 2) * s].split_at(s);
-        let (ea, eb) = self.decoder.decode_pair(
-            &mut self.decoder_b,
-            problem,
-            first,
-            second,
-            &mut self.scratch,
-            &mut self.scratch_b,
-        );
-        let improved = self.take(problem, i, ea, false);
-        self.take(problem, i + 1, eb, true) | improved
-    }
-
-    /// Decodes particle `i` alone.
-    #[inline(always)]
-    fn evaluate(&mut self, problem: &Problem, i: usize) -> bool {
-        let row = i * self.stride..(i + 1) * self.stride;
-        let e = self.decoder.decode(problem, &self.x[row], &mut self.scratch);
-        self.take(problem, i, e, false)
-    }
-
-    /// Updates particle `i`'s personal best with its decoded figures `e`
-    /// (route in `scratch_b` if `second`, else `scratch`) and the
-    /// best-so-far, each on strict improvement.
-    #[inline(always)]
-    fn take(&mut self, problem: &Problem, i: usize, e: RouteEval, second: bool) -> bool {
-        if !problem.better(&e, &self.pbest_eval[i]) {
-            return false;
-        }
-        let row = i * self.stride..(i + 1) * self.stride;
-        self.pbest[row.clone()].copy_from_slice(&self.x[row]);
-        self.pbest_eval[i] = e;
-        if problem.better(&e, &self.best_eval) {
-            self.best = if second { self.scratch_b } else { self.scratch };
-            self.best_eval = e;
-            self.best_particle = i;
-            return true;
-        }
-        false
+    fn v_max(&self) -> f32 {
+        (self.settings.velocity_clamp * (PRIORITY_MAX - PRIORITY_MIN)) as f32
     }
 
     /// Lamarckian write-back for the memetic `auto` planner: makes `route`
@@ -277,19 +251,36 @@ impl Pso {
         self.refresh_gbest();
     }
 
-    /// Decodes every particle (in pairs) and takes the results in order;
-    /// `true` when the best-so-far improved.
+    /// Decodes the whole swarm as one stream ([`Decoder::decode_stream`])
+    /// and takes each particle's result as its walk finishes: its personal
+    /// best and the best-so-far, each on strict improvement. `true` when the
+    /// best-so-far improved. (The order walks finish in is a function of the
+    /// positions alone, so this stays a function of the seed.)
     fn evaluate_all(&mut self, problem: &Problem) -> bool {
+        let stride = self.stride;
+        let x = &self.x;
+        let (pbest, pbest_eval) = (&mut self.pbest, &mut self.pbest_eval);
+        let (best, best_eval, best_particle) = (&mut self.best, &mut self.best_eval, &mut self.best_particle);
         let mut improved = false;
-        let particles = self.settings.particles;
-        let mut i = 0;
-        while i + 1 < particles {
-            improved |= self.evaluate_pair(problem, i);
-            i += 2;
-        }
-        if i < particles {
-            improved |= self.evaluate(problem, i);
-        }
+        self.decoder.decode_stream(
+            problem,
+            self.settings.particles,
+            &|i| &x[i * stride..(i + 1) * stride],
+            &mut |i, route, e| {
+                if !problem.better(&e, &pbest_eval[i]) {
+                    return;
+                }
+                let row = i * stride..(i + 1) * stride;
+                pbest[row.clone()].copy_from_slice(&x[row]);
+                pbest_eval[i] = e;
+                if problem.better(&e, best_eval) {
+                    *best = *route;
+                    *best_eval = e;
+                    *best_particle = i;
+                    improved = true;
+                }
+            },
+        );
         improved
     }
 
@@ -306,6 +297,11 @@ struct Coefficients {
     c1: f32,
     c2: f32,
     v_max: f32,
+    /// The walls: positions stay in [lo, hi]; `absorb` zeroes the velocity
+    /// of a dimension that hit one.
+    lo: f32,
+    hi: f32,
+    absorb: bool,
 }
 
 /// One velocity-and-position update of a particle row; dimension `d` draws
@@ -324,10 +320,10 @@ fn update_row(x: &mut [f32], v: &mut [f32], pbest: &[f32], gbest: &[f32], bits: 
         vel = if vel > k.v_max { k.v_max } else { vel };
         vel = if vel < -k.v_max { -k.v_max } else { vel };
         let next = pos + vel;
-        let outside = !(P_MIN..=P_MAX).contains(&next);
-        let next = if next > P_MAX { P_MAX } else { next };
-        x[d] = if next < P_MIN { P_MIN } else { next };
-        v[d] = if outside { 0.0 } else { vel };
+        let outside = !(k.lo..=k.hi).contains(&next);
+        let next = if next > k.hi { k.hi } else { next };
+        x[d] = if next < k.lo { k.lo } else { next };
+        v[d] = if outside & k.absorb { 0.0 } else { vel };
     }
 }
 
@@ -364,11 +360,18 @@ fn update_swarm_avx2(pso: &mut Pso, w: f32) {
 #[inline(always)]
 fn update_swarm_generic(pso: &mut Pso, w: f32) {
     let stride = pso.stride;
+    let (lo, hi) = match pso.settings.walls {
+        Walls::Absorb | Walls::Clamp => (P_MIN, P_MAX),
+        Walls::Free => (f32::NEG_INFINITY, f32::INFINITY),
+    };
     let k = Coefficients {
         w,
         c1: pso.settings.c1 as f32,
         c2: pso.settings.c2 as f32,
-        v_max: Pso::v_max(),
+        v_max: pso.v_max(),
+        lo,
+        hi,
+        absorb: pso.settings.walls == Walls::Absorb,
     };
     let gbest = &pso.gbest[..stride];
     // The fill runs in whole blocks of the lane count; words past `stride`
@@ -402,7 +405,7 @@ impl Solver for Pso {
         self.lanes.seed(rng);
         let particles = self.settings.particles;
         let range = P_MAX - P_MIN;
-        let v_max = Self::v_max();
+        let v_max = self.v_max().min(P_MAX - P_MIN);
 
         for i in 0..particles {
             let row = i * stride..(i + 1) * stride;
@@ -495,10 +498,65 @@ mod tests {
             pso.step(&p, &mut rng);
             let cells = 20 * pso.stride;
             assert!(pso.x[..cells].iter().all(|x| (P_MIN..=P_MAX).contains(x)));
-            assert!(pso.v[..cells].iter().all(|v| v.abs() <= Pso::v_max()));
+            assert!(pso.v[..cells].iter().all(|v| v.abs() <= pso.v_max()));
         }
         // Some particles have hit a wall and been stopped there.
         assert!(pso.x[..20 * pso.stride].contains(&P_MAX));
+    }
+
+    #[test]
+    fn the_wall_rule_and_clamp_are_settings() {
+        let inst = random_instance(40, 0.4, 31_000.0, 2);
+        let p = Problem::from_instance(&inst).unwrap();
+        let swarm = |walls, velocity_clamp| {
+            let mut pso = Pso::new(PsoSettings {
+                particles: 20,
+                walls,
+                velocity_clamp,
+                ..PsoSettings::paper()
+            });
+            let mut rng = PlannerRng::new(1);
+            pso.start(&p, &mut rng, None);
+            for _ in 0..30 {
+                pso.step(&p, &mut rng);
+            }
+            pso
+        };
+        let cells = 20 * padded_len(40);
+        // Free walls: positions leave the range, the routes stay valid.
+        let free = swarm(Walls::Free, VELOCITY_CLAMP_FRACTION);
+        assert!(free.x[..cells].iter().any(|x| !(P_MIN..=P_MAX).contains(x)));
+        assert!(p.evaluate(free.best().0).is_some_and(|e| e.feasible));
+        let clamp = swarm(Walls::Clamp, VELOCITY_CLAMP_FRACTION);
+        assert!(clamp.x[..cells].iter().all(|x| (P_MIN..=P_MAX).contains(x)));
+        // One dimension pushed through the top wall (w = 1, no pull): each
+        // rule's result.
+        let through = |walls| {
+            let (lo, hi) = match walls {
+                Walls::Free => (f32::NEG_INFINITY, f32::INFINITY),
+                _ => (P_MIN, P_MAX),
+            };
+            let k = Coefficients {
+                w: 1.0,
+                c1: 0.0,
+                c2: 0.0,
+                v_max: 60.0,
+                lo,
+                hi,
+                absorb: walls == Walls::Absorb,
+            };
+            let (mut x, mut v) = ([95.0f32], [20.0f32]);
+            update_row(&mut x, &mut v, &[0.0], &[0.0], &[0], k);
+            (x[0], v[0])
+        };
+        assert_eq!(through(Walls::Absorb), (P_MAX, 0.0));
+        assert_eq!(through(Walls::Clamp), (P_MAX, 20.0));
+        assert_eq!(through(Walls::Free), (115.0, 20.0));
+        // No clamp: speeds exceed the default clamp and stay finite.
+        let unclamped = swarm(Walls::Absorb, f64::INFINITY);
+        let v_default = (VELOCITY_CLAMP_FRACTION * (PRIORITY_MAX - PRIORITY_MIN)) as f32;
+        assert!(unclamped.v[..cells].iter().any(|v| v.abs() > v_default));
+        assert!(unclamped.v[..cells].iter().all(|v| v.is_finite()));
     }
 
     #[test]

@@ -130,6 +130,17 @@ impl LandChart {
         self.land.iter().map(|l| &l.polygon)
     }
 
+    /// Each land polygon's rings (the exterior, then its holes) as (x, y)
+    /// in the local frame, m: for writers that know nothing of `geo`.
+    pub fn rings(&self) -> impl Iterator<Item = Vec<Vec<(f64, f64)>>> + '_ {
+        self.polygons().map(|p| {
+            std::iter::once(p.exterior())
+                .chain(p.interiors())
+                .map(|r| r.coords().map(|c| (c.x, c.y)).collect())
+                .collect()
+        })
+    }
+
     fn has_water(&self) -> bool {
         let g = WATER_CHECK_GRID;
         (0..g * g).any(|k| {
@@ -255,20 +266,27 @@ mod tests {
 
     /// A square island of about 1 km a side whose south-west corner is
     /// about 1 km east and 1 km north of the origin, as lon/lat.
+    /// The ring through `pts` (local m) as GeoJSON positions [lon, lat].
+    fn lon_lat_ring(f: &LocalFrame, pts: &[(f64, f64)]) -> Vec<[f64; 2]> {
+        pts.iter()
+            .map(|&(x, y)| {
+                let p = f.to_geodetic(x, y).unwrap();
+                [p.lon, p.lat]
+            })
+            .collect()
+    }
+
     fn island_ring(f: &LocalFrame) -> Vec<[f64; 2]> {
-        [
-            (1000.0, 1000.0),
-            (2000.0, 1000.0),
-            (2000.0, 2000.0),
-            (1000.0, 2000.0),
-            (1000.0, 1000.0),
-        ]
-        .iter()
-        .map(|&(x, y)| {
-            let p = f.to_geodetic(x, y).unwrap();
-            [p.lon, p.lat]
-        })
-        .collect()
+        lon_lat_ring(
+            f,
+            &[
+                (1000.0, 1000.0),
+                (2000.0, 1000.0),
+                (2000.0, 2000.0),
+                (1000.0, 2000.0),
+                (1000.0, 1000.0),
+            ],
+        )
     }
 
     fn island_doc(f: &LocalFrame) -> String {
@@ -345,19 +363,16 @@ mod tests {
                 .is_water(1500.0, 1500.0)
         );
         // A lake: an island ring with a hole is water inside the hole.
-        let outer: Vec<[f64; 2]> = [
-            (500.0, 500.0),
-            (3500.0, 500.0),
-            (3500.0, 2500.0),
-            (500.0, 2500.0),
-            (500.0, 500.0),
-        ]
-        .iter()
-        .map(|&(x, y)| {
-            let p = f.to_geodetic(x, y).unwrap();
-            [p.lon, p.lat]
-        })
-        .collect();
+        let outer: Vec<[f64; 2]> = lon_lat_ring(
+            &f,
+            &[
+                (500.0, 500.0),
+                (3500.0, 500.0),
+                (3500.0, 2500.0),
+                (500.0, 2500.0),
+                (500.0, 500.0),
+            ],
+        );
         let doc = format!(
             r#"{{"type": "Polygon", "coordinates": [{}, {ring}]}}"#,
             serde_json::to_string(&outer).unwrap()
@@ -400,19 +415,16 @@ mod tests {
             assert!(!e.contains('\n'), "{e}");
         }
         // Land over the whole area.
-        let all: Vec<[f64; 2]> = [
-            (-10.0, -10.0),
-            (5000.0, -10.0),
-            (5000.0, 5000.0),
-            (-10.0, 5000.0),
-            (-10.0, -10.0),
-        ]
-        .iter()
-        .map(|&(x, y)| {
-            let p = f.to_geodetic(x, y).unwrap();
-            [p.lon, p.lat]
-        })
-        .collect();
+        let all: Vec<[f64; 2]> = lon_lat_ring(
+            &f,
+            &[
+                (-10.0, -10.0),
+                (5000.0, -10.0),
+                (5000.0, 5000.0),
+                (-10.0, 5000.0),
+                (-10.0, -10.0),
+            ],
+        );
         let doc = format!(
             r#"{{"type": "Polygon", "coordinates": [{}]}}"#,
             serde_json::to_string(&all).unwrap()

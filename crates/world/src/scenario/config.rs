@@ -3,10 +3,12 @@
 //! Contract: [`ScenarioConfig::default`] holds every default of the scenario
 //! model (the table and sources are in the [parent module](super)).
 //! [`ScenarioConfig::from_json`] accepts a JSON object whose fields are all
-//! optional (absent ⇒ default) and rejects, with a [`ConfigError`] naming the
-//! field, anything else: unknown fields, wrong types, NaN-free but out-of-range
-//! numbers, more nodes than [`MAX_NODES`], more dynamic waypoints than
-//! `nodes − 2`. [`ScenarioConfig::to_json`] writes every field, and reads back
+//! optional (absent ⇒ default) and rejects, with a one-line [`ConfigError`]
+//! naming the field's path, anything else: unknown fields, wrong types,
+//! out-of-range numbers, more nodes than [`MAX_NODES`], more dynamic
+//! waypoints than `nodes − 2`. The document is read by serde derive
+//! (`deny_unknown_fields`; `serde_path_to_error` gives the path), then
+//! [`ScenarioConfig::validate`] checks the ranges. [`ScenarioConfig::to_json`] writes every field, and reads back
 //! to an equal config.
 //!
 //! ```json
@@ -23,7 +25,7 @@
 
 use std::path::{Path, PathBuf};
 
-use serde_json::{Map, Value, json};
+use serde_json::json;
 
 use auv_core::instance::Objective;
 use auv_core::problem::MAX_NODES;
@@ -154,12 +156,15 @@ pub enum ConfigError {
     /// Not JSON at all.
     #[error("scenario JSON: {0}")]
     Json(String),
-    /// The document is not a JSON object.
-    #[error("scenario must be a JSON object")]
-    NotAnObject,
-    /// A field this format does not define.
-    #[error("scenario has unknown field `{0}`")]
-    UnknownField(String),
+    /// A field that is unknown, of the wrong type, or missing a part
+    /// (serde's message, with the field's path).
+    #[error("scenario field `{field}`: {message}")]
+    Field {
+        /// Field path, e.g. `chart.metres_per_pixel` or `priority[0]`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
     /// `format` is present but not [`SCENARIO_FORMAT`].
     #[error("scenario field `format` = {0:?}: expected \"{SCENARIO_FORMAT}\"")]
     WrongFormat(String),
@@ -207,9 +212,6 @@ pub enum ConfigError {
         /// Upper end.
         hi: f64,
     },
-    /// An objective kind the instance format does not define.
-    #[error("scenario field `objective.kind` = {0:?}: expected \"max_weight\" or \"paper_cost\"")]
-    UnknownObjective(String),
 }
 
 fn bad(field: &str, value: f64, rule: &'static str) -> ConfigError {
@@ -293,7 +295,7 @@ impl ScenarioConfig {
             ChartSource::Embedded(name) if name.is_empty() => {
                 return Err(ConfigError::WrongType {
                     field: "chart".into(),
-                    expected: "a chart name or {\"png\": path, \"metres_per_pixel\": m}",
+                    expected: CHART_EXPECTED,
                     found: "\"\"".into(),
                 });
             }
@@ -349,37 +351,23 @@ impl ScenarioConfig {
 
     /// Parses and validates a scenario document (fields absent ⇒ defaults).
     pub fn from_json(text: &str) -> Result<Self, ConfigError> {
-        let value: Value = serde_json::from_str(text).map_err(|e| ConfigError::Json(e.to_string()))?;
-        let Value::Object(map) = value else {
-            return Err(ConfigError::NotAnObject);
-        };
-        let mut cfg = Self::default();
-        for (key, v) in &map {
-            match key.as_str() {
-                "format" => match v.as_str() {
-                    Some(SCENARIO_FORMAT) => {}
-                    Some(other) => return Err(ConfigError::WrongFormat(other.to_string())),
-                    None => return Err(wrong_type("format", "a string", v)),
-                },
-                "nodes" => cfg.nodes = count(key, v)?,
-                "dynamic" => cfg.dynamic = count(key, v)?,
-                "sigma_m" => cfg.sigma_m = number(key, v)?,
-                "bound_sigma_m" => cfg.bound_sigma_m = number(key, v)?,
-                "depth_max_m" => cfg.depth_max_m = number(key, v)?,
-                "speed_mps" => cfg.speed_mps = number(key, v)?,
-                "time_available_s" => cfg.time_available_s = number(key, v)?,
-                "priority" => cfg.priority = range(key, v)?,
-                "risk" => cfg.risk = range(key, v)?,
-                "task_time_s" => cfg.task_time_s = range(key, v)?,
-                "objective" => cfg.objective = objective(v)?,
-                "chart" => cfg.chart = chart(v)?,
-                "k" => cfg.k = count(key, v)?,
-                "sensor_period_s" => cfg.sensor_period_s = number(key, v)?,
-                "position_attempts" => cfg.position_attempts = attempts(key, v)?,
-                "redraw_attempts" => cfg.redraw_attempts = attempts(key, v)?,
-                other => return Err(ConfigError::UnknownField(other.to_string())),
+        let mut de = serde_json::Deserializer::from_str(text);
+        let Obj(doc): Obj<ScenarioDoc> = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            if inner.is_syntax() || inner.is_eof() {
+                ConfigError::Json(inner.to_string())
+            } else if path == "." {
+                ConfigError::Json(strip_position(&inner.to_string()))
+            } else {
+                ConfigError::Field {
+                    field: path,
+                    message: strip_position(&inner.to_string()),
+                }
             }
-        }
+        })?;
+        de.end().map_err(|e| ConfigError::Json(e.to_string()))?;
+        let cfg = doc.into_config()?;
         cfg.validate()?;
         Ok(cfg)
     }
@@ -423,93 +411,143 @@ impl ScenarioConfig {
     }
 }
 
-fn wrong_type(field: &str, expected: &'static str, found: &Value) -> ConfigError {
-    let mut found = found.to_string();
-    if found.len() > 40 {
-        found.truncate(37);
-        found.push_str("...");
-    }
-    ConfigError::WrongType {
-        field: field.to_string(),
-        expected,
-        found,
+/// serde_json's message without its " at line L column C" suffix (the
+/// field path says where).
+fn strip_position(message: &str) -> String {
+    match message.rfind(" at line ") {
+        Some(k) => message[..k].to_string(),
+        None => message.to_string(),
     }
 }
 
-fn number(field: &str, v: &Value) -> Result<f64, ConfigError> {
-    v.as_f64().ok_or_else(|| wrong_type(field, "a number", v))
+/// The scenario document as written: every field optional, nothing else
+/// accepted.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioDoc {
+    format: Option<String>,
+    nodes: Option<usize>,
+    dynamic: Option<usize>,
+    sigma_m: Option<f64>,
+    bound_sigma_m: Option<f64>,
+    depth_max_m: Option<f64>,
+    speed_mps: Option<f64>,
+    time_available_s: Option<f64>,
+    priority: Option<[f64; 2]>,
+    risk: Option<[f64; 2]>,
+    task_time_s: Option<[f64; 2]>,
+    objective: Option<Obj<ObjectiveDoc>>,
+    chart: Option<ChartDoc>,
+    k: Option<usize>,
+    sensor_period_s: Option<f64>,
+    position_attempts: Option<u32>,
+    redraw_attempts: Option<u32>,
 }
 
-fn count(field: &str, v: &Value) -> Result<usize, ConfigError> {
-    v.as_u64()
-        .and_then(|n| usize::try_from(n).ok())
-        .ok_or_else(|| wrong_type(field, "a non-negative integer", v))
+#[derive(serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+enum ObjectiveDoc {
+    // A struct variant, so that stray fields next to the kind are refused.
+    MaxWeight {},
+    PaperCost { phi1: f64, phi2: f64 },
 }
 
-fn attempts(field: &str, v: &Value) -> Result<u32, ConfigError> {
-    v.as_u64()
-        .and_then(|n| u32::try_from(n).ok())
-        .ok_or_else(|| wrong_type(field, "a non-negative integer below 2^32", v))
-}
+/// A `T` that must be written as a JSON object (a derived struct would also
+/// take an array of its fields in order).
+struct Obj<T>(T);
 
-fn range(field: &str, v: &Value) -> Result<UniformRange, ConfigError> {
-    match v.as_array().map(Vec::as_slice) {
-        Some([lo, hi]) => Ok(UniformRange::new(
-            number(&format!("{field}[0]"), lo)?,
-            number(&format!("{field}[1]"), hi)?,
-        )),
-        _ => Err(wrong_type(field, "[lo, hi], two numbers", v)),
-    }
-}
-
-fn object<'a>(field: &str, v: &'a Value, expected: &'static str) -> Result<&'a Map<String, Value>, ConfigError> {
-    v.as_object().ok_or_else(|| wrong_type(field, expected, v))
-}
-
-fn objective(v: &Value) -> Result<Objective, ConfigError> {
-    let map = object("objective", v, "{\"kind\": ...}")?;
-    let mut kind = None;
-    let (mut phi1, mut phi2) = (None, None);
-    for (key, x) in map {
-        match key.as_str() {
-            "kind" => kind = Some(x.as_str().ok_or_else(|| wrong_type("objective.kind", "a string", x))?),
-            "phi1" => phi1 = Some(number("objective.phi1", x)?),
-            "phi2" => phi2 = Some(number("objective.phi2", x)?),
-            other => return Err(ConfigError::UnknownField(format!("objective.{other}"))),
+impl<'de, T: serde::Deserialize<'de>> serde::Deserialize<'de> for Obj<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(std::marker::PhantomData<T>);
+        impl<'de, T: serde::Deserialize<'de>> serde::de::Visitor<'de> for V<T> {
+            type Value = Obj<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, m: A) -> Result<Obj<T>, A::Error> {
+                T::deserialize(serde::de::value::MapAccessDeserializer::new(m)).map(Obj)
+            }
         }
-    }
-    match kind {
-        Some("max_weight") => Ok(Objective::MaxWeight),
-        Some("paper_cost") => match (phi1, phi2) {
-            (Some(phi1), Some(phi2)) => Ok(Objective::PaperCost { phi1, phi2 }),
-            _ => Err(wrong_type("objective", "paper_cost with numeric phi1 and phi2", v)),
-        },
-        Some(other) => Err(ConfigError::UnknownObjective(other.to_string())),
-        None => Err(wrong_type("objective.kind", "a string", &Value::Null)),
+        d.deserialize_map(V(std::marker::PhantomData))
     }
 }
 
-fn chart(v: &Value) -> Result<ChartSource, ConfigError> {
-    const EXPECTED: &str = "a chart name or {\"png\": path, \"metres_per_pixel\": m}";
-    if let Some(name) = v.as_str() {
-        return Ok(ChartSource::Embedded(name.to_string()));
-    }
-    let map = object("chart", v, EXPECTED)?;
-    let (mut path, mut mpp) = (None, None);
-    for (key, x) in map {
-        match key.as_str() {
-            "png" => path = Some(x.as_str().ok_or_else(|| wrong_type("chart.png", "a path string", x))?),
-            "metres_per_pixel" => mpp = Some(number("chart.metres_per_pixel", x)?),
-            other => return Err(ConfigError::UnknownField(format!("chart.{other}"))),
+/// `chart`: an embedded chart's name, or a PNG and its scale.
+enum ChartDoc {
+    Name(String),
+    Png(PngDoc),
+}
+
+const CHART_EXPECTED: &str = "a chart name or {\"png\": path, \"metres_per_pixel\": m}";
+
+impl<'de> serde::Deserialize<'de> for ChartDoc {
+    // By hand rather than `untagged`, so that an error inside the PNG form
+    // keeps its field path.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = ChartDoc;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(CHART_EXPECTED)
+            }
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<ChartDoc, E> {
+                Ok(ChartDoc::Name(s.to_string()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, m: A) -> Result<ChartDoc, A::Error> {
+                use serde::Deserialize as _;
+                PngDoc::deserialize(serde::de::value::MapAccessDeserializer::new(m)).map(ChartDoc::Png)
+            }
         }
+        d.deserialize_any(V)
     }
-    match (path, mpp) {
-        (Some(path), Some(metres_per_pixel)) => Ok(ChartSource::Png {
-            path: PathBuf::from(path),
-            metres_per_pixel,
-        }),
-        (None, _) => Err(wrong_type("chart.png", "a path string", &Value::Null)),
-        (_, None) => Err(wrong_type("chart.metres_per_pixel", "a number", &Value::Null)),
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PngDoc {
+    png: PathBuf,
+    metres_per_pixel: f64,
+}
+
+impl ScenarioDoc {
+    /// The configuration: the defaults with the fields given replaced.
+    fn into_config(self) -> Result<ScenarioConfig, ConfigError> {
+        if let Some(f) = self.format
+            && f != SCENARIO_FORMAT
+        {
+            return Err(ConfigError::WrongFormat(f));
+        }
+        let d = ScenarioConfig::default();
+        let range = |r: Option<[f64; 2]>, def: UniformRange| r.map_or(def, |[lo, hi]| UniformRange::new(lo, hi));
+        Ok(ScenarioConfig {
+            nodes: self.nodes.unwrap_or(d.nodes),
+            dynamic: self.dynamic.unwrap_or(d.dynamic),
+            sigma_m: self.sigma_m.unwrap_or(d.sigma_m),
+            bound_sigma_m: self.bound_sigma_m.unwrap_or(d.bound_sigma_m),
+            depth_max_m: self.depth_max_m.unwrap_or(d.depth_max_m),
+            speed_mps: self.speed_mps.unwrap_or(d.speed_mps),
+            time_available_s: self.time_available_s.unwrap_or(d.time_available_s),
+            priority: range(self.priority, d.priority),
+            risk: range(self.risk, d.risk),
+            task_time_s: range(self.task_time_s, d.task_time_s),
+            objective: match self.objective {
+                None => d.objective,
+                Some(Obj(ObjectiveDoc::MaxWeight {})) => Objective::MaxWeight,
+                Some(Obj(ObjectiveDoc::PaperCost { phi1, phi2 })) => Objective::PaperCost { phi1, phi2 },
+            },
+            chart: match self.chart {
+                None => d.chart,
+                Some(ChartDoc::Name(name)) => ChartSource::Embedded(name),
+                Some(ChartDoc::Png(p)) => ChartSource::Png {
+                    path: p.png,
+                    metres_per_pixel: p.metres_per_pixel,
+                },
+            },
+            k: self.k.unwrap_or(d.k),
+            sensor_period_s: self.sensor_period_s.unwrap_or(d.sensor_period_s),
+            position_attempts: self.position_attempts.unwrap_or(d.position_attempts),
+            redraw_attempts: self.redraw_attempts.unwrap_or(d.redraw_attempts),
+        })
     }
 }
 
@@ -588,7 +626,7 @@ mod tests {
     #[test]
     fn every_bad_field_is_named_in_the_error() {
         let cases: &[(&str, &str)] = &[
-            ("[1, 2]", "JSON object"),
+            ("[1, 2]", "expected a JSON object"),
             ("{", "scenario JSON"),
             (r#"{"nodez": 40}"#, "unknown field `nodez`"),
             (r#"{"format": "auv-scenario/2"}"#, "`format`"),
@@ -597,8 +635,8 @@ mod tests {
                 "`nodes` = 129 exceeds the planner's capacity of 128",
             ),
             (r#"{"nodes": 1, "dynamic": 0}"#, "`nodes` = 1"),
-            (r#"{"nodes": -3}"#, "`nodes` = -3"),
-            (r#"{"nodes": 40.5}"#, "`nodes` = 40.5"),
+            (r#"{"nodes": -3}"#, "`nodes`: invalid value: integer `-3`"),
+            (r#"{"nodes": 40.5}"#, "`nodes`: invalid type: floating point `40.5`"),
             (r#"{"nodes": "40"}"#, "`nodes`"),
             (
                 r#"{"nodes": 12, "dynamic": 11}"#,
@@ -613,31 +651,49 @@ mod tests {
             (r#"{"time_available_s": -31000}"#, "`time_available_s`"),
             (r#"{"priority": [10, 1]}"#, "`priority` = [10, 1]"),
             (r#"{"priority": [-1, 1]}"#, "`priority[0]`"),
-            (r#"{"priority": [1]}"#, "`priority`"),
+            (r#"{"priority": [1]}"#, "`priority`: invalid length 1"),
             (r#"{"risk": [0, 1]}"#, "`risk[0]`"),
             (r#"{"task_time_s": [-5, 1]}"#, "`task_time_s[0]`"),
             (r#"{"task_time_s": [1, "x"]}"#, "`task_time_s[1]`"),
-            (r#"{"objective": {"kind": "min_time"}}"#, "`objective.kind`"),
-            (r#"{"objective": {"kind": "paper_cost"}}"#, "`objective`"),
+            (
+                r#"{"objective": {"kind": "min_time"}}"#,
+                "`objective.kind`: unknown variant `min_time`",
+            ),
+            (
+                r#"{"objective": {"kind": "paper_cost"}}"#,
+                "`objective`: missing field `phi1`",
+            ),
             (
                 r#"{"objective": {"kind": "paper_cost", "phi1": -1, "phi2": 1}}"#,
                 "`objective.phi1`",
             ),
             (
                 r#"{"objective": {"kind": "max_weight", "phi3": 1}}"#,
-                "`objective.phi3`",
+                "unknown field `phi3`",
             ),
-            (r#"{"chart": 3}"#, "`chart`"),
+            (
+                r#"{"chart": 3}"#,
+                "`chart`: invalid type: integer `3`, expected a chart name",
+            ),
+            (r#"{"chart": ["a.png", 2]}"#, "`chart`: invalid type: sequence"),
+            (
+                r#"{"objective": ["max_weight"]}"#,
+                "`objective`: invalid type: sequence, expected a JSON object",
+            ),
+            (r#"{"nodes": 10} {}"#, "trailing characters"),
             (r#"{"chart": ""}"#, "`chart`"),
-            (r#"{"chart": {"png": "a.png"}}"#, "`chart.metres_per_pixel`"),
+            (
+                r#"{"chart": {"png": "a.png"}}"#,
+                "`chart`: missing field `metres_per_pixel`",
+            ),
             (
                 r#"{"chart": {"png": "a.png", "metres_per_pixel": -2}}"#,
                 "`chart.metres_per_pixel`",
             ),
-            (r#"{"chart": {"metres_per_pixel": 2}}"#, "`chart.png`"),
+            (r#"{"chart": {"metres_per_pixel": 2}}"#, "missing field `png`"),
             (
                 r#"{"chart": {"png": "a.png", "metres_per_pixel": 2, "dpi": 3}}"#,
-                "`chart.dpi`",
+                "unknown field `dpi`",
             ),
             (r#"{"k": 1}"#, "`k` = 1"),
             (r#"{"k": 17}"#, "`k` = 17"),

@@ -13,8 +13,8 @@
 //! bound, σ, prize and task, so two different layouts never share one.
 
 use super::{
-    ConfigError, STREAM_BOUNDS, STREAM_INITIAL, STREAM_POSITIONS, STREAM_TASKS, ScenarioConfig, Task, UniformRange,
-    Vec3, World, draw_over_water, pair_index, scenario_fingerprint, sub_stream,
+    ConfigError, STREAM_BOUNDS, STREAM_POSITIONS, STREAM_TASKS, ScenarioConfig, Task, UniformRange, Vec3, World,
+    draw_over_water, pair_index, scenario_fingerprint, sub_stream,
 };
 use crate::chart::WaterMap;
 use auv_core::problem::{MAX_NODES, NodeSet};
@@ -249,15 +249,7 @@ impl World {
             tasks,
             adjacency: [NodeSet::EMPTY; MAX_NODES],
         };
-        for i in dynamic.iter() {
-            let mut rng = sub_stream(seed, STREAM_INITIAL, i as u64);
-            world.position[i] = world.draw_dynamic(i, &mut rng, map).0;
-        }
-        let mut all = NodeSet::EMPTY;
-        for i in 0..n {
-            all.insert(i);
-        }
-        world.update_edges(all, map);
+        world.place_initially(map);
         Ok(world)
     }
 }

@@ -311,17 +311,24 @@ impl World {
             tasks,
             adjacency: [NodeSet::EMPTY; MAX_NODES],
         };
-        for i in dynamic.iter() {
-            let mut rng = sub_stream(seed, STREAM_INITIAL, i as u64);
+        world.place_initially(map);
+        Ok(world)
+    }
+
+    /// Draws every dynamic waypoint's initial position (epoch 0, from its
+    /// own stream of the seed) and computes every edge: the last step of
+    /// building a world, whoever laid it out.
+    fn place_initially(&mut self, map: &impl WaterMap) {
+        for i in self.dynamic.iter() {
+            let mut rng = sub_stream(self.seed, STREAM_INITIAL, i as u64);
             // A fallback here is legal (nominal is water); nothing to report.
-            world.position[i] = world.draw_dynamic(i, &mut rng, map).0;
+            self.position[i] = self.draw_dynamic(i, &mut rng, map).0;
         }
         let mut all = NodeSet::EMPTY;
-        for i in 0..n {
+        for i in 0..self.n() {
             all.insert(i);
         }
-        world.update_edges(all, map);
-        Ok(world)
+        self.update_edges(all, map);
     }
 
     /// Redraws every dynamic waypoint around its nominal position (the
@@ -516,13 +523,27 @@ impl World {
         excluded: NodeSet,
         budget_s: f64,
     ) -> Result<(), ProblemError> {
+        self.fill_problem_with(problem, start, excluded, budget_s, |_, _| true)
+    }
+
+    /// [`World::fill_problem`] keeping only the edges (a, b), a < b, for
+    /// which `keep(a, b)` holds: a thinner network of the same waypoints
+    /// (e.g. for studies of network density). Does not allocate.
+    pub fn fill_problem_with(
+        &self,
+        problem: &mut Problem,
+        start: usize,
+        excluded: NodeSet,
+        budget_s: f64,
+        keep: impl Fn(usize, usize) -> bool,
+    ) -> Result<(), ProblemError> {
         let n = self.n();
         problem.begin(n, start, self.goal(), budget_s, self.config.objective, excluded)?;
         for (i, &prize) in self.prize.iter().enumerate() {
             problem.set_prize(i, prize);
         }
         for a in 0..n {
-            for b in self.adjacency[a].iter().filter(|&b| b > a) {
+            for b in self.adjacency[a].iter().filter(|&b| b > a && keep(a, b)) {
                 let d = self.distance_m(a, b);
                 let t = self.tasks[pair_index(a, b)];
                 problem.set_edge(
