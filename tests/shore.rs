@@ -63,8 +63,15 @@ fn start_shore(ep: &str, out: Option<&Path>, extra: &[&str]) -> Child {
         .expect("start the shore console")
 }
 
+/// A one-shot `planner shore … --command …` (giving up after 30 s unless
+/// `args` says otherwise).
 fn shore_command(ep: &str, args: &[&str]) -> Output {
-    let child = start_shore(ep, None, &[&["--give-up-s", "30"], args].concat());
+    let give_up: &[&str] = if args.contains(&"--give-up-s") {
+        &[]
+    } else {
+        &["--give-up-s", "30"]
+    };
+    let child = start_shore(ep, None, &[give_up, args].concat());
     wait_with_watchdog(child, LIMIT)
 }
 
@@ -159,8 +166,10 @@ fn the_shore_sees_every_plan_published_onboard_and_the_end_of_the_mission() {
     );
 }
 
-/// A waypoint neither visited nor in the plan being followed, from the mission's log.
-fn untouched_waypoint(out: &Path) -> u64 {
+/// A waypoint the vehicle will not reach soon, from the mission's log: one
+/// neither visited nor planned if there is one, else the plan's last before
+/// the goal (a small network may have every waypoint on the plan).
+fn unvisited_waypoint(out: &Path) -> u64 {
     let log = std::fs::read_to_string(out.join("mission.log")).unwrap_or_default();
     let mut visited = vec![0u64, 11];
     let mut route = Vec::new();
@@ -182,7 +191,8 @@ fn untouched_waypoint(out: &Path) -> u64 {
     (1..11u64)
         .rev()
         .find(|n| !visited.contains(n) && !route.contains(n))
-        .expect("a waypoint off the plan")
+        .or_else(|| route.iter().rev().copied().find(|n| !visited.contains(n)))
+        .expect("a waypoint not visited yet")
 }
 
 #[test]
@@ -207,7 +217,7 @@ fn each_command_kind_is_validated_applied_once_and_acknowledged_with_its_plan() 
         text(&o.stderr)
     );
     // Applied, and a plan made for it.
-    let w = untouched_waypoint(&out).to_string();
+    let w = unvisited_waypoint(&out).to_string();
     let args = ["--command", "remove-task", "--waypoint", &w, "--command-id", "4242"];
     let o = shore_command(&ep, &args);
     assert!(o.status.success(), "{}", text(&o.stderr));
@@ -259,6 +269,13 @@ fn a_link_cut_changes_nothing_onboard_is_reported_on_both_sides_and_the_shore_ca
     sigkill(link);
     wait_for_line(&first_out, "shore.log", "link_lost");
     wait_for_line(&first_out, "shore.log", "link_restored");
+    // The new bridge must have heard this console before it goes, or it
+    // has no link to lose.
+    let t0 = Instant::now();
+    while count_lines(&out, "link.jsonl", "link_connected") < 2 {
+        assert!(t0.elapsed() < LIMIT, "the restarted bridge never heard the console");
+        std::thread::sleep(Duration::from_millis(20));
+    }
     // Cut 2: the console killed; the bridge notices, a new console catches up.
     let mut first = first;
     let _ = first.kill();
@@ -277,8 +294,11 @@ fn a_link_cut_changes_nothing_onboard_is_reported_on_both_sides_and_the_shore_ca
     assert!(l["detect_ms_max"].as_f64().unwrap() >= 300.0, "{l:#}");
     let s = read_json(&second_out.join("shore.json"));
     assert_eq!(s["outcome"], r["outcome"], "{s:#}");
-    assert_eq!(s["plans"], r["plans"], "{s:#}\n{r:#}");
-    assert_eq!(s["plan_seq_gaps"], 0, "{s:#}");
+    // Every plan from the first on: seen live, caught up from the bridge's
+    // history (kept across its restart), or published while no bridge ran
+    // and counted as a gap.
+    let (seen, gaps) = (s["plans"].as_u64().unwrap(), s["plan_seq_gaps"].as_u64().unwrap());
+    assert_eq!(seen + gaps, r["plans"].as_u64().unwrap(), "{s:#}\n{r:#}");
     assert!(s["plans_catch_up"].as_u64().unwrap() >= 1, "{s:#}");
 }
 
@@ -298,12 +318,13 @@ fn peers_without_credentials_can_neither_read_nor_command_and_a_viewer_cannot_co
         .expect("the shipped onboard configuration")
         .replace("/etc/auv/shore-users.txt", users.to_str().unwrap());
     let onboard = write(&cfg, "onboard.json5", &onboard);
-    let cred = |user: &str, pw: &str| {
+    let cred = |file: &str, user: &str, pw: &str| {
         let body = format!("{{ transport: {{ auth: {{ usrpwd: {{ user: \"{user}\", password: \"{pw}\" }} }} }} }}");
-        write(&cfg, &format!("{user}.json5"), &body)
+        write(&cfg, file, &body)
     };
-    let (operator, viewer) = (cred("operator", "op-secret"), cred("viewer", "view-secret"));
-    let intruder = cred("operator", "guess");
+    let operator = cred("operator.json5", "operator", "op-secret");
+    let viewer = cred("viewer.json5", "viewer", "view-secret");
+    let intruder = cred("intruder.json5", "operator", "guess");
     let op = ["--zenoh-config", operator.to_str().unwrap()];
     let mission = start_mission(&out, &p, &ep, "600", &["--zenoh-config", onboard.to_str().unwrap()]);
     let watcher = start_shore(&ep, Some(&watch_out), &[&op[..], &["--give-up-s", "60"]].concat());

@@ -66,6 +66,77 @@ pub struct BridgeConfig {
     pub log: Option<PathBuf>,
     /// The endpoint listened on (for the log).
     pub endpoint: String,
+    /// Where the plans forwarded are kept (one payload per line), so a
+    /// restarted bridge still answers the history with the plans its
+    /// predecessor forwarded.
+    pub plan_history: Option<PathBuf>,
+}
+
+/// The plans forwarded so far, oldest first, the last [`PLAN_HISTORY`]:
+/// in memory and, when given a file, appended to it as they come.
+struct PlanHistory {
+    plans: std::collections::VecDeque<Vec<u8>>,
+    file: Option<std::fs::File>,
+}
+
+impl PlanHistory {
+    /// The history kept in `path` (read back if it exists), or in memory only.
+    fn open(path: Option<&PathBuf>) -> Result<Self, BridgeError> {
+        let mut h = Self {
+            plans: std::collections::VecDeque::new(),
+            file: None,
+        };
+        let Some(path) = path else { return Ok(h) };
+        let io = |e: std::io::Error| BridgeError::Log {
+            path: path.display().to_string(),
+            detail: e.to_string(),
+        };
+        let mut torn = false;
+        match std::fs::read(path) {
+            // A torn last line (the predecessor killed mid-write) is dropped:
+            // only complete payloads are answered.
+            Ok(bytes) => {
+                for line in bytes.split(|&b| b == b'\n') {
+                    if serde_json::from_slice::<serde_json::Value>(line).is_ok() {
+                        h.remember(line.to_vec());
+                    }
+                }
+                torn = bytes.last().is_some_and(|&b| b != b'\n');
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io(e)),
+        }
+        let mut file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(io)?;
+        if torn {
+            // End the torn line so the next plan starts a line of its own.
+            std::io::Write::write_all(&mut file, b"\n").map_err(io)?;
+        }
+        h.file = Some(file);
+        Ok(h)
+    }
+
+    fn remember(&mut self, bytes: Vec<u8>) {
+        if self.plans.len() == PLAN_HISTORY {
+            self.plans.pop_front();
+        }
+        self.plans.push_back(bytes);
+    }
+
+    /// Adds a plan; a failed write costs only the history of a restart.
+    fn push(&mut self, bytes: &[u8]) {
+        if let Some(f) = &mut self.file {
+            use std::io::Write as _;
+            let mut line = Vec::with_capacity(bytes.len() + 1);
+            line.extend_from_slice(bytes);
+            line.push(b'\n');
+            let _ = f.write_all(&line);
+        }
+        self.remember(bytes.to_vec());
+    }
 }
 
 /// Why the bridge stopped with an error.
@@ -80,7 +151,7 @@ pub enum BridgeError {
     /// Zenoh refused a declaration.
     #[error("zenoh: {0}")]
     Zenoh(String),
-    /// The link log could not be written.
+    /// The link log or the plan history could not be opened.
     #[error("{path}: {detail}")]
     Log {
         /// The file.
@@ -213,7 +284,7 @@ pub fn run_bridge(
     let queryable = session.declare_queryable(keys::latest(v)).wait().map_err(zerr)?;
     let history_key = keys::key(v, keys::PLAN_HISTORY);
     let history_queryable = session.declare_queryable(history_key.clone()).wait().map_err(zerr)?;
-    let mut history: std::collections::VecDeque<Vec<u8>> = std::collections::VecDeque::new();
+    let mut history = PlanHistory::open(cfg.plan_history.as_ref())?;
 
     let mut log = LinkLog::open(cfg.log.as_ref())?;
     let mut monitor = LinkMonitor::new(cfg.link_timeout);
@@ -265,10 +336,7 @@ pub fn run_bridge(
             let _ = p.put(bytes.clone()).wait();
             summary.forwarded += 1;
             if leaf == keys::PLAN {
-                if history.len() == PLAN_HISTORY {
-                    history.pop_front();
-                }
-                history.push_back(bytes.clone());
+                history.push(&bytes);
             }
             latest.insert(leaf, bytes);
         }
@@ -352,7 +420,7 @@ pub fn run_bridge(
             }
         }
         while let Ok(Some(q)) = history_queryable.try_recv() {
-            for bytes in &history {
+            for bytes in &history.plans {
                 let _ = q.reply(history_key.as_str(), bytes.clone()).wait();
             }
         }
@@ -396,6 +464,41 @@ pub fn run_bridge(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_plan_history_survives_a_restart_and_drops_a_torn_line() {
+        let dir = std::env::temp_dir().join(format!("auv-link-history-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("plans.jsonl");
+        let _ = std::fs::remove_file(&f);
+        let mut h = PlanHistory::open(Some(&f)).unwrap();
+        h.push(br#"{"seq":1}"#);
+        h.push(br#"{"seq":2}"#);
+        drop(h);
+        // The predecessor died in the middle of its third line.
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(&f)
+            .and_then(|mut w| std::io::Write::write_all(&mut w, br#"{"seq":"#))
+            .unwrap();
+        let mut h = PlanHistory::open(Some(&f)).unwrap();
+        assert_eq!(h.plans.len(), 2);
+        h.push(br#"{"seq":3}"#);
+        let again = PlanHistory::open(Some(&f)).unwrap();
+        let seqs: Vec<_> = again
+            .plans
+            .iter()
+            .map(|b| String::from_utf8_lossy(b).into_owned())
+            .collect();
+        assert_eq!(seqs.last().map(String::as_str), Some(r#"{"seq":3}"#), "{seqs:?}");
+        let mut mem = PlanHistory::open(None).unwrap();
+        for k in 0..PLAN_HISTORY + 5 {
+            mem.push(format!("{{\"seq\":{k}}}").as_bytes());
+        }
+        assert_eq!(mem.plans.len(), PLAN_HISTORY);
+        assert_eq!(mem.plans.front().map(Vec::as_slice), Some(&b"{\"seq\":5}"[..]));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn commands_resolve_waypoints_by_name_or_id_and_refuse_the_rest() {

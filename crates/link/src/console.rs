@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use zenoh::Wait;
 use zenoh::handlers::FifoChannelHandler;
 use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::query::ConsolidationMode;
 use zenoh::sample::Sample;
 
 use super::encode::{self, Ack, Command, DecodeError, Event, Heartbeat, PlanMsg, Snapshot, State, Status, types};
@@ -205,7 +206,10 @@ impl ShoreLink {
     fn catch_up(&mut self, each: &mut dyn FnMut(Result<Received, Refused>), changes: &mut Vec<LinkChange>) {
         let plans = keys::key(&self.vehicle, keys::PLAN_HISTORY);
         for selector in [plans, keys::latest(&self.vehicle)] {
-            let Ok(replies) = self.session.get(selector).timeout(Duration::from_secs(2)).wait() else {
+            // Every reply, not Zenoh's default of the latest per key: the
+            // history answers many plans on one key.
+            let get = self.session.get(selector).consolidation(ConsolidationMode::None);
+            let Ok(replies) = get.timeout(Duration::from_secs(2)).wait() else {
                 continue;
             };
             while let Ok(reply) = replies.recv() {

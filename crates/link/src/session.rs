@@ -81,9 +81,11 @@ pub fn config(side: Side, endpoint: &str, file: Option<&Path>) -> Result<Config,
         Side::Shore => {
             set("listen/endpoints", "[]")?;
             set("connect/endpoints", &endpoints)?;
-            // Do not wait for the vehicle at start-up, never give up, and
-            // retry quickly: the console must come back with the link.
-            set("connect/timeout_ms", "0")?;
+            // Never give up and connect in the background (an infinite
+            // timeout with exit_on_failure off; a zero timeout would mean
+            // one attempt and no retry), retrying quickly: the console must
+            // start before the vehicle and come back with the link.
+            set("connect/timeout_ms", "-1")?;
             set("connect/exit_on_failure", "false")?;
             set(
                 "connect/retry",
@@ -96,6 +98,9 @@ pub fn config(side: Side, endpoint: &str, file: Option<&Path>) -> Result<Config,
 
 /// Opens the session of `side` on `endpoint`.
 pub fn open(side: Side, endpoint: &str, file: Option<&Path>) -> Result<Session, SessionError> {
+    // Zenoh's own diagnostics on stderr, at the level `RUST_LOG` asks for
+    // (errors only by default): a link that does not come up says why.
+    zenoh::init_log_from_env_or("error");
     let cfg = config(side, endpoint, file)?;
     zenoh::open(cfg).wait().map_err(|e| SessionError::Open(e.to_string()))
 }

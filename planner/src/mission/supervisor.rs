@@ -313,6 +313,10 @@ pub(super) fn supervise(
             args.extend(["--listen".into(), endpoint.clone()]);
             args.extend(a.link.to_flags());
             args.extend(["--log".into(), out.join("link.jsonl").display().to_string()]);
+            args.extend([
+                "--plan-history".into(),
+                out.join("link-plans.jsonl").display().to_string(),
+            ]);
             let me = std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?;
             let mut kid = Kid::new("link", me, &args, out).map_err(child)?;
             kid.start(&[]).map_err(child)?;

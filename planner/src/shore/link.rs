@@ -31,6 +31,10 @@ pub struct LinkArgs {
     /// this file, one JSON line each.
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
+    /// Keep the plans forwarded in this file (read back when the link
+    /// restarts, so a console catching up still gets them).
+    #[arg(long, value_name = "FILE")]
+    pub plan_history: Option<PathBuf>,
 }
 
 fn link(a: &LinkArgs) -> Result<(), (u8, String)> {
@@ -52,6 +56,7 @@ fn link(a: &LinkArgs) -> Result<(), (u8, String)> {
         names,
         log: a.log.clone(),
         endpoint: a.listen.clone(),
+        plan_history: a.plan_history.clone(),
     };
     drop(world);
     let opts = a.ipc.options().map_err(|e| usage(e.to_string()))?;
