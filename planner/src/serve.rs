@@ -13,6 +13,7 @@ use auv_messages::wire::{FaultCycle, PLAN_FAULTS, WireRules};
 use auv_platform::signal;
 use auv_service::alloc;
 use auv_service::core::{PlannerCore, ServiceConfig, ServiceEvent};
+use auv_service::plan_out::FaultyPlans;
 use auv_service::run::{ExitReason, PlannerPorts, run_service};
 use auv_transport::guard::Guarded;
 use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
@@ -208,12 +209,13 @@ pub type ShmPlannerPorts = PlannerPorts<
     IpcWaker<Shm>,
     IpcInbox<Shm, VehicleState>,
     IpcInbox<Shm, WaypointSnapshot>,
-    IpcOutbox<Shm, Plan>,
+    FaultyPlans<IpcOutbox<Shm, Plan>>,
     IpcOutbox<Shm, PlannerStatus>,
 >;
 
 /// Opens the planner's ports in the context's domain; inputs are checked
-/// against `rules` (the scenario's world) besides their own validation.
+/// against `rules` (the scenario's world) besides their own validation;
+/// `inject_plans` are the bad plans sent before good ones (tests).
 pub fn open_ports(
     ctx: &IpcContext<Shm>,
     fingerprint: u64,
@@ -226,9 +228,8 @@ pub fn open_ports(
         states: Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "planner").with_check(rules.state_check()),
         snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "planner")
             .with_check(rules.snapshot_check()),
-        plans: ctx.outbox::<Plan>(stamp)?,
+        plans: FaultyPlans::new(ctx.outbox::<Plan>(stamp)?, inject_plans),
         status: ctx.outbox::<PlannerStatus>(stamp)?,
-        inject_plans,
     })
 }
 
