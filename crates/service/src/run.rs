@@ -11,10 +11,9 @@
 use core::time::Duration;
 
 use super::alloc;
-use super::core::{PlanResult, PlannerCore, ServiceEvent};
-use auv_core::problem::MAX_NODES;
-use auv_messages::msg::{Plan, PlannerStatus, RejectCounters, VehicleState, WaypointSnapshot, route_ids};
-use auv_messages::wire::{FaultCycle, bad_route};
+use super::core::{PlannerCore, ServiceEvent};
+use super::plan_out::PlanOutbox;
+use auv_messages::msg::{Plan, PlannerStatus, RejectCounters, VehicleState, WaypointSnapshot};
 use auv_platform::clock::mono_now_ns;
 use auv_transport::guard::Guarded;
 use auv_transport::{Inbox, Outbox, TransportError, Wake, Waker};
@@ -31,7 +30,7 @@ where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
-    OP: Outbox<Plan>,
+    OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
 {
     /// Wakes on vehicle states and snapshots.
@@ -40,12 +39,10 @@ where
     pub states: Guarded<VehicleState, IS>,
     /// Waypoint snapshots, validated.
     pub snapshots: Guarded<WaypointSnapshot, IW>,
-    /// Plans out.
+    /// Plans out (with `--inject-plan`, a [`super::plan_out::FaultyPlans`]).
     pub plans: OP,
     /// Status out.
     pub status: OS,
-    /// Bad plans to send next to good ones (tests: `--inject-plan`); none normally.
-    pub inject_plans: FaultCycle,
 }
 
 /// Why the loop returned.
@@ -64,7 +61,7 @@ where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
-    OP: Outbox<Plan>,
+    OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
 {
     /// Rejected input so far, both topics.
@@ -72,25 +69,6 @@ where
         let mut r = *self.states.rejected();
         r.merge(self.snapshots.rejected());
         r
-    }
-
-    /// With plan injection on: sends a bad variant of the plan for `r`
-    /// (through a non-edge or a visited waypoint) before the good one. A
-    /// fault that cannot be built yet (nothing visited) is skipped.
-    fn inject_plan(&mut self, core: &PlannerCore, r: &PlanResult) -> Result<(), TransportError> {
-        let (Some(fault), Some(snap)) = (self.inject_plans.advance(), core.snapshot()) else {
-            return Ok(());
-        };
-        let visited = core.last_state().map_or(&[][..], |s| route_ids(&s.route, s.route_len));
-        let mut bad = [0u8; MAX_NODES];
-        if let Some(len) = bad_route(fault, r.route.as_bytes(), snap, visited, &mut bad) {
-            self.plans.publish(&mut |m: &mut Plan| {
-                core.fill_plan(r, m);
-                m.route = bad;
-                m.route_len = len as u32;
-            })?;
-        }
-        Ok(())
     }
 
     fn publish_status(&mut self, core: &PlannerCore) -> Result<(), TransportError> {
@@ -113,7 +91,7 @@ where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
-    OP: Outbox<Plan>,
+    OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
 {
     let warmup = core.config().warmup_plans;
@@ -136,7 +114,7 @@ where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
-    OP: Outbox<Plan>,
+    OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
 {
     let mut last_status_ns = 0u64;
@@ -168,10 +146,9 @@ where
         if let Some(result) = core.replan() {
             handled += 1;
             if let Ok(r) = result {
-                if !ports.inject_plans.is_empty() {
-                    ports.inject_plan(core, &r)?;
-                }
-                ports.plans.publish(&mut |m: &mut Plan| core.fill_plan(&r, m))?;
+                ports
+                    .plans
+                    .publish_plan(core.plan_context(), &mut |m: &mut Plan| core.fill_plan(&r, m))?;
                 core.published(&r, mono_now_ns(), events);
                 // Warm-up ends after the status that follows this plan: the
                 // first send of each port connects it to its consumers
@@ -214,7 +191,6 @@ mod tests {
             snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>().unwrap(), fp, "planner"),
             plans: ctx.outbox::<Plan>(Stamp::new(fp)).unwrap(),
             status: ctx.outbox::<PlannerStatus>(Stamp::new(fp)).unwrap(),
-            inject_plans: FaultCycle::NONE,
         };
         // The peers: a sensor, a vehicle, and one foreign sender.
         let mut snap_out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();
