@@ -13,6 +13,7 @@ use auv_messages::wire::{FaultCycle, PLAN_FAULTS, WireRules};
 use auv_platform::signal;
 use auv_service::alloc;
 use auv_service::core::{PlannerCore, ServiceConfig, ServiceEvent};
+use auv_service::plan_out::FaultyPlans;
 use auv_service::run::{ExitReason, PlannerPorts, run_service};
 use auv_transport::guard::Guarded;
 use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
@@ -109,8 +110,28 @@ pub enum ServeError {
     Log(String),
 }
 
+impl ServeArgs {
+    /// The command line that starts `planner serve` with these flags, from
+    /// the subcommand on: the one way a parent (the mission's supervisor, the
+    /// latency bench) starts the service, so what it passes and what `serve`
+    /// parses cannot drift apart.
+    pub fn to_argv(&self) -> Vec<String> {
+        let mut v = vec!["serve".to_string()];
+        v.extend(self.ipc.to_flags());
+        v.extend(self.scenario.to_flags());
+        v.extend(self.service.to_flags());
+        if self.lockstep {
+            v.push("--lockstep".into());
+        }
+        if let Some(p) = &self.log {
+            v.extend(["--log".into(), p.display().to_string()]);
+        }
+        v
+    }
+}
+
 impl ServiceArgs {
-    /// The flags that give these settings (to start `planner serve` with them).
+    /// The flags that give these settings (see [`ServeArgs::to_argv`]).
     pub fn to_flags(&self) -> Vec<String> {
         let mut f = vec![
             "--deadline-ms".to_string(),
@@ -208,14 +229,15 @@ pub type ShmPlannerPorts = PlannerPorts<
     IpcWaker<Shm>,
     IpcInbox<Shm, VehicleState>,
     IpcInbox<Shm, WaypointSnapshot>,
-    IpcOutbox<Shm, Plan>,
+    FaultyPlans<IpcOutbox<Shm, Plan>>,
     IpcOutbox<Shm, PlannerStatus>,
     IpcInbox<Shm, OperatorCommand>,
     IpcOutbox<Shm, CommandAck>,
 >;
 
 /// Opens the planner's ports in the context's domain; inputs are checked
-/// against `rules` (the scenario's world) besides their own validation.
+/// against `rules` (the scenario's world) besides their own validation;
+/// `inject_plans` are the bad plans sent before good ones (tests).
 pub fn open_ports(
     ctx: &IpcContext<Shm>,
     fingerprint: u64,
@@ -228,11 +250,10 @@ pub fn open_ports(
         states: Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "planner").with_check(rules.state_check()),
         snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "planner")
             .with_check(rules.snapshot_check()),
-        plans: ctx.outbox::<Plan>(stamp)?,
+        plans: FaultyPlans::new(ctx.outbox::<Plan>(stamp)?, inject_plans),
         status: ctx.outbox::<PlannerStatus>(stamp)?,
         commands: Guarded::new(ctx.inbox::<OperatorCommand>()?, fingerprint, "planner"),
         acks: ctx.outbox::<CommandAck>(stamp)?,
-        inject_plans,
     })
 }
 
@@ -357,12 +378,90 @@ pub fn run_serve(args: &ServeArgs) -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::Parser;
+    use crate::mission::cli::IpcCommand;
+    use clap::{CommandFactory, Parser};
 
     #[derive(Parser)]
     struct Cli {
         #[command(flatten)]
         service: ServiceArgs,
+    }
+
+    /// The `planner` command line as far as `serve` goes.
+    #[derive(Parser)]
+    struct Planner {
+        #[command(subcommand)]
+        cmd: IpcCommand,
+    }
+
+    fn parse_serve(argv: &[String]) -> ServeArgs {
+        let cli = Planner::try_parse_from(std::iter::once("planner".to_string()).chain(argv.iter().cloned()));
+        match cli.map(|c| c.cmd) {
+            Ok(IpcCommand::Serve(a)) => a,
+            Ok(other) => panic!("not serve: {other:?}"),
+            Err(e) => panic!("{argv:?}: {e}"),
+        }
+    }
+
+    #[test]
+    fn serve_args_survive_the_trip_to_a_child_command_line() {
+        let mission = std::env::current_dir().unwrap().join("missions/benoits-cove.toml");
+        let every = |scenario: &[&str]| -> Vec<String> {
+            [
+                "serve",
+                "--ipc-prefix",
+                "rt_x_",
+                "--vehicle",
+                "auv7",
+                "--spin",
+                "--deadline-ms",
+                "12.5",
+                "--iterations",
+                "77",
+                "--algorithm",
+                "bbo",
+                "--replan-threshold-s",
+                "0.1",
+                "--reserve-s",
+                "250.25",
+                "--drift-allowance",
+                "0.3",
+                "--planner-seed",
+                "18446744073709551615",
+                "--rt-priority",
+                "0",
+                "--inject-plan",
+                "non_edge,bad_plan",
+                "--lockstep",
+                "--log",
+                "/tmp/some where/mission.log",
+                "--time-available-s",
+                "9000.5",
+            ]
+            .iter()
+            .chain(scenario)
+            .map(|s| s.to_string())
+            .collect()
+        };
+        let with_mission = every(&["--seed", "4", "--mission", mission.to_str().unwrap()]);
+        let with_generator = every(&["--scenario", "some.toml", "--nodes", "12"]);
+        let defaults = vec!["serve".to_string()];
+        let mut passed = std::collections::BTreeSet::new();
+        for argv in [with_mission, with_generator, defaults] {
+            let a = parse_serve(&argv);
+            let child = a.to_argv();
+            assert_eq!(parse_serve(&child), a, "{argv:?} → {child:?}");
+            passed.extend(child.into_iter().filter(|f| f.starts_with("--")));
+        }
+        // Every flag `serve` takes is one the child command line can carry.
+        let cmd = Planner::command();
+        let serve = cmd.find_subcommand("serve").unwrap();
+        for arg in serve.get_arguments() {
+            let Some(long) = arg.get_long() else { continue };
+            if long != "help" {
+                assert!(passed.contains(&format!("--{long}")), "--{long} is never passed on");
+            }
+        }
     }
 
     #[test]

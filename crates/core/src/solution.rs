@@ -10,7 +10,7 @@
 //! JSON field names are the format's; f64 values are written
 //! shortest-round-trip, so a parsed solution compares bit-for-bit.
 //!
-//! Units: seconds, metres, milliseconds (`solve_ms`).
+//! Units: seconds, metres, milliseconds (`solve_ms`, `solve_thread_cpu_ms`).
 
 use serde::{Deserialize, Serialize};
 
@@ -31,17 +31,22 @@ pub struct RunInfo {
     pub stop: StopReason,
     /// Wall-clock time of the solve, ms.
     pub solve_ms: f64,
+    /// CPU time the solving thread spent in the solve, ms (read by the
+    /// caller: this crate has no clock of its own).
+    pub solve_thread_cpu_ms: f64,
 }
 
 impl RunInfo {
-    /// The facts of a finished [`crate::solver::run`].
-    pub fn from_outcome(algorithm: &str, seed: u64, outcome: &SolveOutcome) -> Self {
+    /// The facts of a finished [`crate::solver::run`] whose thread spent
+    /// `thread_cpu_ms` of CPU time on it.
+    pub fn from_outcome(algorithm: &str, seed: u64, outcome: &SolveOutcome, thread_cpu_ms: f64) -> Self {
         Self {
             algorithm: algorithm.to_string(),
             seed,
             iterations: outcome.iterations,
             stop: outcome.stop,
             solve_ms: outcome.elapsed.as_secs_f64() * 1e3,
+            solve_thread_cpu_ms: thread_cpu_ms,
         }
     }
 }
@@ -64,9 +69,14 @@ pub struct Solution {
     pub cost: f64,
     /// Tasks completed (edges travelled).
     pub tasks: u32,
-    /// Wall-clock time of the solve, ms (the only figure that varies
-    /// between runs with the same seed).
+    /// Wall-clock time of the solve, ms (with `solve_thread_cpu_ms`, the
+    /// only figures that vary between runs with the same seed).
     pub solve_ms: f64,
+    /// CPU time of the solving thread during the solve, ms: on a shared
+    /// machine the wall time includes waiting for a core, this does not.
+    /// 0 in a solution written without it.
+    #[serde(default)]
+    pub solve_thread_cpu_ms: f64,
     /// Iterations (generations) completed.
     pub iterations: u32,
     /// Solver name.
@@ -121,6 +131,7 @@ impl Solution {
             cost: s.cost,
             tasks: s.tasks,
             solve_ms: run.solve_ms,
+            solve_thread_cpu_ms: run.solve_thread_cpu_ms,
             iterations: run.iterations,
             algorithm: run.algorithm.clone(),
             seed: run.seed,
@@ -202,8 +213,8 @@ impl Solution {
         line(
             "solver",
             format!(
-                "{}, seed {}, {} iterations, stopped on {}, {:.3} ms",
-                self.algorithm, self.seed, self.iterations, self.stop, self.solve_ms
+                "{}, seed {}, {} iterations, stopped on {}, {:.3} ms ({:.3} ms thread CPU)",
+                self.algorithm, self.seed, self.iterations, self.stop, self.solve_ms, self.solve_thread_cpu_ms
             ),
         );
         line("route", route.join(" -> "));
@@ -238,6 +249,7 @@ mod tests {
             iterations: 150,
             stop: StopReason::Budget,
             solve_ms: 1.25,
+            solve_thread_cpu_ms: 1.0,
         }
     }
 
@@ -290,6 +302,7 @@ mod tests {
             "cost",
             "tasks",
             "solve_ms",
+            "solve_thread_cpu_ms",
             "iterations",
             "algorithm",
             "seed",

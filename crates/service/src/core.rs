@@ -457,6 +457,17 @@ impl PlannerCore {
         self.vehicle.known.then_some(&*self.last_state)
     }
 
+    /// What the next plan is computed from: the snapshot in force and the
+    /// vehicle's route so far (borrowed, for a plan outbox that needs them).
+    pub fn plan_context(&self) -> crate::plan_out::PlanContext<'_> {
+        crate::plan_out::PlanContext {
+            snapshot: self.snapshot(),
+            visited: self
+                .last_state()
+                .map_or(&[][..], |s| auv_messages::msg::route_ids(&s.route, s.route_len)),
+        }
+    }
+
     /// The vehicle's mission time as last reported, s.
     pub fn mission_time_s(&self) -> f64 {
         self.vehicle.mission_time_s

@@ -11,12 +11,11 @@
 use core::time::Duration;
 
 use super::alloc;
-use super::core::{AckRecord, PlanResult, PlannerCore, ServiceEvent};
-use auv_core::problem::MAX_NODES;
+use super::core::{AckRecord, PlannerCore, ServiceEvent};
+use super::plan_out::PlanOutbox;
 use auv_messages::msg::{
-    CommandAck, OperatorCommand, Plan, PlannerStatus, RejectCounters, VehicleState, WaypointSnapshot, route_ids,
+    CommandAck, OperatorCommand, Plan, PlannerStatus, RejectCounters, VehicleState, WaypointSnapshot,
 };
-use auv_messages::wire::{FaultCycle, bad_route};
 use auv_platform::clock::mono_now_ns;
 use auv_transport::guard::Guarded;
 use auv_transport::{Inbox, Outbox, TransportError, Wake, Waker};
@@ -33,7 +32,7 @@ where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
-    OP: Outbox<Plan>,
+    OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
     IC: Inbox<OperatorCommand>,
     OA: Outbox<CommandAck>,
@@ -44,7 +43,7 @@ where
     pub states: Guarded<VehicleState, IS>,
     /// Waypoint snapshots, validated.
     pub snapshots: Guarded<WaypointSnapshot, IW>,
-    /// Plans out.
+    /// Plans out (with `--inject-plan`, a [`super::plan_out::FaultyPlans`]).
     pub plans: OP,
     /// Status out.
     pub status: OS,
@@ -52,8 +51,6 @@ where
     pub commands: Guarded<OperatorCommand, IC>,
     /// Command acks out.
     pub acks: OA,
-    /// Bad plans to send next to good ones (tests: `--inject-plan`); none normally.
-    pub inject_plans: FaultCycle,
 }
 
 /// Why the loop returned.
@@ -72,7 +69,7 @@ where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
-    OP: Outbox<Plan>,
+    OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
     IC: Inbox<OperatorCommand>,
     OA: Outbox<CommandAck>,
@@ -97,25 +94,6 @@ where
         result
     }
 
-    /// With plan injection on: sends a bad variant of the plan for `r`
-    /// (through a non-edge or a visited waypoint) before the good one. A
-    /// fault that cannot be built yet (nothing visited) is skipped.
-    fn inject_plan(&mut self, core: &PlannerCore, r: &PlanResult) -> Result<(), TransportError> {
-        let (Some(fault), Some(snap)) = (self.inject_plans.advance(), core.snapshot()) else {
-            return Ok(());
-        };
-        let visited = core.last_state().map_or(&[][..], |s| route_ids(&s.route, s.route_len));
-        let mut bad = [0u8; MAX_NODES];
-        if let Some(len) = bad_route(fault, r.route.as_bytes(), snap, visited, &mut bad) {
-            self.plans.publish(&mut |m: &mut Plan| {
-                core.fill_plan(r, m);
-                m.route = bad;
-                m.route_len = len as u32;
-            })?;
-        }
-        Ok(())
-    }
-
     fn publish_status(&mut self, core: &PlannerCore) -> Result<(), TransportError> {
         let rejected = self.rejected();
         self.status
@@ -136,7 +114,7 @@ where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
-    OP: Outbox<Plan>,
+    OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
     IC: Inbox<OperatorCommand>,
     OA: Outbox<CommandAck>,
@@ -161,7 +139,7 @@ where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
-    OP: Outbox<Plan>,
+    OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
     IC: Inbox<OperatorCommand>,
     OA: Outbox<CommandAck>,
@@ -209,10 +187,9 @@ where
             handled += 1;
             match result {
                 Ok(r) => {
-                    if !ports.inject_plans.is_empty() {
-                        ports.inject_plan(core, &r)?;
-                    }
-                    let plan_seq = ports.plans.publish(&mut |m: &mut Plan| core.fill_plan(&r, m))?;
+                    let plan_seq = ports
+                        .plans
+                        .publish_plan(core.plan_context(), &mut |m: &mut Plan| core.fill_plan(&r, m))?;
                     core.published(&r, mono_now_ns(), events);
                     if core.has_pending_acks() {
                         ports.publish_acks(core, plan_seq, r.replan)?;
@@ -264,7 +241,6 @@ mod tests {
             status: ctx.outbox::<PlannerStatus>(Stamp::new(fp)).unwrap(),
             commands: Guarded::new(ctx.inbox::<OperatorCommand>().unwrap(), fp, "planner"),
             acks: ctx.outbox::<CommandAck>(Stamp::new(fp)).unwrap(),
-            inject_plans: FaultCycle::NONE,
         };
         // The peers: a sensor, a vehicle, and one foreign sender.
         let mut snap_out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();

@@ -388,6 +388,28 @@ impl IpcArgs {
         let mode = if self.spin { WaitMode::Spin } else { WaitMode::Event };
         IpcOptions::new(self.ipc_prefix.as_deref(), &self.vehicle, mode)
     }
+
+    /// The flags that give these settings (to start a child process with them).
+    pub fn to_flags(&self) -> Vec<String> {
+        let mut f = Vec::new();
+        if let Some(p) = &self.ipc_prefix {
+            f.extend(["--ipc-prefix".to_string(), p.clone()]);
+        }
+        f.extend(["--vehicle".to_string(), self.vehicle.clone()]);
+        if self.spin {
+            f.push("--spin".into());
+        }
+        f
+    }
+
+    /// The flags of `opts` (a run's domain, its vehicle and how it waits).
+    pub fn of(opts: &IpcOptions) -> Self {
+        Self {
+            ipc_prefix: Some(opts.prefix.clone()),
+            vehicle: opts.vehicle.clone(),
+            spin: opts.mode == WaitMode::Spin,
+        }
+    }
 }
 
 /// A fresh isolation prefix for one run: `<tag><pid base36><counter>_`,

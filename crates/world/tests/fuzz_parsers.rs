@@ -207,7 +207,7 @@ proptest! {
         let s = RouteStats::from_instance(&inst, &route).unwrap();
         let good = Solution {
             route, feasible: s.feasible, weight: s.weight, time_s: s.time_s, distance_m: s.distance_m,
-            cost: s.cost, tasks: s.tasks, solve_ms: 1.0, iterations: 3, algorithm: "pso".into(), seed: 1,
+            cost: s.cost, tasks: s.tasks, solve_ms: 1.0, solve_thread_cpu_ms: 0.5, iterations: 3, algorithm: "pso".into(), seed: 1,
             stop: "budget".into(), objective: "max_weight".into(), instance: inst.name.clone(),
         };
         prop_assert!(good.verify(&inst).is_ok());

@@ -5,7 +5,9 @@
 //! Contract: the figures printed are recomputed from the instance and the
 //! route ([`auv_core::solution::Solution::new`]), not copied from the solver.
 //! The same instance, algorithm, seed and iteration count print the same
-//! output except `solve_ms`.
+//! output except `solve_ms` (wall clock) and `solve_thread_cpu_ms` (the
+//! solving thread's CPU clock, `CLOCK_THREAD_CPUTIME_ID`: on a shared
+//! machine the wall time also counts waiting for a core).
 //!
 //! `--algorithm exact` runs the branch-and-bound
 //! ([`auv_core::solver::exact::solve_exact`], the format's full order: best
@@ -24,6 +26,7 @@ use auv_core::rng::PlannerRng;
 use auv_core::solution::{RunInfo, Solution};
 use auv_core::solver::exact::{ExactSettings, solve_exact};
 use auv_core::solver::{self, Algorithm, Budget, SolveOutcome, Solver, StopReason};
+use auv_platform::clock::thread_cpu_time_s;
 use clap::ValueEnum;
 
 use super::{CliError, DEFAULT_SEED, load_instance, print};
@@ -141,6 +144,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         )));
     }
     let mut rng = PlannerRng::new(args.seed);
+    let cpu0 = thread_cpu_time_s();
     let outcome = solver::run(
         solver.as_mut(),
         &problem,
@@ -151,8 +155,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
             deadline: args.deadline_ms.map(|d| Instant::now() + Duration::from_millis(d)),
         },
     );
+    let cpu_ms = cpu_ms_since(cpu0);
     let route = solver.best().0.to_vec();
-    let info = RunInfo::from_outcome(solver.name(), args.seed, &outcome);
+    let info = RunInfo::from_outcome(solver.name(), args.seed, &outcome, cpu_ms);
     let solution = Solution::new(&inst, &route, &info).map_err(|e| {
         CliError::Internal(format!(
             "{} returned {route:?}, which is not a route of the instance: {e}",
@@ -164,6 +169,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
     } else {
         print(&solution.summary(&inst))
     }
+}
+
+/// This thread's CPU time since `cpu0` (a [`thread_cpu_time_s`] reading), ms.
+fn cpu_ms_since(cpu0: f64) -> f64 {
+    ((thread_cpu_time_s() - cpu0) * 1e3).max(0.0)
 }
 
 /// The exact solver's solution object: the format's fields, then its own.
@@ -202,8 +212,10 @@ fn run_exact(
         time_limit,
         ..ExactSettings::default()
     };
+    let cpu0 = thread_cpu_time_s();
     let out =
         solve_exact(problem, &settings).map_err(|e| CliError::Usage(format!("{}: exact: {e}", path.display())))?;
+    let cpu_ms = cpu_ms_since(cpu0);
     let route = out.route.to_vec();
     let outcome = SolveOutcome {
         iterations: u32::try_from(out.nodes_explored).unwrap_or(u32::MAX),
@@ -214,7 +226,7 @@ fn run_exact(
         },
         elapsed: out.elapsed,
     };
-    let info = RunInfo::from_outcome("exact", args.seed, &outcome);
+    let info = RunInfo::from_outcome("exact", args.seed, &outcome, cpu_ms);
     let solution = Solution::new(inst, &route, &info).map_err(|e| {
         CliError::Internal(format!(
             "exact returned {route:?}, which is not a route of the instance: {e}"

@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 use hdrhistogram::Histogram;
 use serde_json::json;
 
-use crate::serve::{DEFAULT_RT_PRIORITY, request_fifo};
+use crate::serve::{DEFAULT_RT_PRIORITY, ServeArgs, ServiceArgs, request_fifo};
 use auv_messages::msg::{
     Outcome, Plan, PlannerStatus, RawPing, RawPong, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot,
 };
@@ -61,12 +61,6 @@ pub struct BenchArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// The planner's deadline, ms.
-    #[arg(long, default_value_t = 20.0)]
-    pub deadline_ms: f64,
-    /// Solver iterations per plan (cut at the deadline).
-    #[arg(long, default_value_t = 150)]
-    pub iterations: u32,
     /// Real time between a plan's arrival and the next trigger, ms. Missions
     /// trigger sparsely (about one arrival per real second at 1000×); a
     /// back-to-back loop would keep an RT planner busy above the kernel's RT
@@ -74,9 +68,6 @@ pub struct BenchArgs {
     /// for ~50 ms and turns the bench into a test of the throttle.
     #[arg(long, default_value_t = 2.0)]
     pub pause_ms: f64,
-    /// Run the planner's service thread under SCHED_FIFO at this priority.
-    #[arg(long, value_name = "PRIO")]
-    pub rt_priority: Option<i32>,
     /// SCHED_FIFO priority of this bench's measuring thread (the receiving
     /// end of every plan and pong); 0 = normal scheduling. Default: try
     /// priority 10 (as a real-time consumer of plans would run), falling
@@ -91,6 +82,9 @@ pub struct BenchArgs {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub scenario: ScenarioArgs,
+    /// The measured planner's flags, passed on to its `planner serve`.
+    #[command(flatten)]
+    pub service: ServiceArgs,
 }
 
 /// `planner bench-echo` flags (started by the bench).
@@ -205,16 +199,8 @@ fn wait(waker: &mut dyn Waker, t: Duration) -> Result<(), BenchError> {
 }
 
 fn raw_pingpong(opts: &IpcOptions, rounds: u32, warmup: u32) -> Result<Histogram<u64>, BenchError> {
-    let mut args = vec![
-        "bench-echo".to_string(),
-        "--ipc-prefix".into(),
-        opts.prefix.clone(),
-        "--vehicle".into(),
-        opts.vehicle.clone(),
-    ];
-    if opts.mode == WaitMode::Spin {
-        args.push("--spin".into());
-    }
+    let mut args = vec!["bench-echo".to_string()];
+    args.extend(IpcArgs::of(opts).to_flags());
     let echo = Reaper(Some(spawn(&args)?));
     let ctx = IpcContext::<Shm>::new(opts, "bench")?;
     let mut ping = ctx.outbox::<RawPing>(Stamp::new(0))?;
@@ -276,27 +262,14 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
     let world = load_world(&a.scenario).map_err(|e| BenchError::Usage(e.to_string()))?;
     let fingerprint = world.fingerprint();
     let inst = world.snapshot();
-    let mut args: Vec<String> = [
-        "serve",
-        "--ipc-prefix",
-        &opts.prefix,
-        "--vehicle",
-        &opts.vehicle,
-        "--deadline-ms",
-        &a.deadline_ms.to_string(),
-        "--iterations",
-        &a.iterations.to_string(),
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    args.extend(a.scenario.to_flags());
-    if let Some(p) = a.rt_priority {
-        args.extend(["--rt-priority".to_string(), p.to_string()]);
+    let args = ServeArgs {
+        ipc: IpcArgs::of(opts),
+        scenario: a.scenario.clone(),
+        service: a.service.clone(),
+        lockstep: false,
+        log: None,
     }
-    if opts.mode == WaitMode::Spin {
-        args.push("--spin".into());
-    }
+    .to_argv();
     let planner = Reaper(Some(spawn(&args)?));
     let ctx = IpcContext::<Shm>::new(opts, "bench")?;
     let stamp = Stamp::new(fingerprint);
@@ -322,7 +295,7 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
         }
         wait(&mut waker, Duration::from_millis(20))?;
     }
-    let deadline_ns = (a.deadline_ms * 1e6) as u64;
+    let deadline_ns = (a.service.deadline_ms * 1e6) as u64;
     let mut run = PlannerRun {
         end_to_end: histogram(),
         planner: histogram(),
@@ -433,11 +406,17 @@ fn bench(a: &BenchArgs) -> Result<serde_json::Value, BenchError> {
     if a.triggers == 0 {
         return Err(BenchError::Usage("--triggers must be at least 1".into()));
     }
-    if !(a.deadline_ms.is_finite() && a.deadline_ms > 1.0 && a.deadline_ms <= 60_000.0) {
-        return Err(BenchError::Usage(format!(
-            "--deadline-ms {}: must be between 1 and 60000",
-            a.deadline_ms
-        )));
+    // The service's own checks, before anything starts.
+    let world = load_world(&a.scenario).map_err(|e| BenchError::Usage(e.to_string()))?;
+    a.service
+        .config(&world, false)
+        .map_err(|e| BenchError::Usage(e.to_string()))?;
+    drop(world);
+    if a.service.inject_plan.is_some() {
+        // The bench takes the first plan for a trigger as its answer.
+        return Err(BenchError::Usage(
+            "--inject-plan: not with bench-latency (a bad plan would be timed as the answer)".into(),
+        ));
     }
     if !(a.pause_ms.is_finite() && (0.0..=10_000.0).contains(&a.pause_ms)) {
         return Err(BenchError::Usage(format!(
@@ -470,11 +449,12 @@ fn bench(a: &BenchArgs) -> Result<serde_json::Value, BenchError> {
     Ok(json!({
         "triggers": a.triggers,
         "warmup": a.warmup,
-        "deadline_ms": a.deadline_ms,
+        "deadline_ms": a.service.deadline_ms,
         "spin": a.spin,
         "world": world_desc,
-        "iterations_budget": a.iterations,
-        "rt_priority": a.rt_priority,
+        "iterations_budget": a.service.iterations,
+        "algorithm": a.service.algorithm.to_string(),
+        "rt_priority": a.service.rt_priority,
         "receiver_rt_priority": receiver_rt,
         "pause_ms": a.pause_ms,
         "iterations_mean": run.iterations as f64 / n as f64,

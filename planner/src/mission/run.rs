@@ -29,7 +29,7 @@ use auv_messages::msg::{Outcome, RejectCounters, VehicleState};
 use auv_messages::wire::{FaultCycle, SENSOR_FAULTS, VEHICLE_FAULTS};
 use auv_platform::signal;
 use auv_transport::ipc::{cleanup_dead_nodes, domain_config, leftover_files, retire_domain};
-use auv_transport::{IpcOptions, SetupError, WaitMode, unique_prefix};
+use auv_transport::{IpcArgs, IpcOptions, SetupError, WaitMode, unique_prefix};
 use auv_world::load::{MissionWorld, ScenarioArgs, WorldError, load_world};
 
 /// `planner mission` flags.
@@ -374,7 +374,7 @@ pub(super) struct RunOut {
 /// How to start the simulators, where to write, and the mission's budget.
 pub(super) struct Launch<'a> {
     pub(super) out: &'a Path,
-    /// Flags every process gets.
+    /// The domain's and the scenario's flags every child shares.
     pub(super) common: &'a [String],
     pub(super) sensor_args: &'a [String],
     pub(super) vehicle_args: &'a [String],
@@ -440,12 +440,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let mark = RunMark::new(&prefix);
     cleanup_dead_nodes(&domain_config(&prefix)?);
 
-    let mut common = vec![
-        "--ipc-prefix".to_string(),
-        prefix.clone(),
-        "--vehicle".into(),
-        a.vehicle.clone(),
-    ];
+    let mut common = IpcArgs::of(&opts).to_flags();
     common.extend(a.scenario.to_flags());
     let mut vehicle_args = common.clone();
     let mut sensor_args = common.clone();

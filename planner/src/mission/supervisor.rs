@@ -36,10 +36,11 @@ use super::restart::{
 };
 use super::run::{Launch, MissionArgs, MissionError, RunOut, io_err, sibling_binary};
 use super::supervise::{FaultKind, FaultReport, LATEST_INJECTION, LivenessEvent, Monitor, Proc, plan_faults};
+use crate::serve::ServeArgs;
 use auv_messages::journal::{Journal, JournalEvent, JournalSummary};
 use auv_messages::msg::Outcome;
 use auv_platform::signal;
-use auv_transport::IpcOptions;
+use auv_transport::{IpcArgs, IpcOptions};
 
 /// Supervision flags of `planner mission`.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -273,15 +274,16 @@ pub(super) fn supervise(
     let timeouts = [stall, sensor_stall, stall];
     // The monitor subscribes before anyone publishes: it sees every status.
     let mut monitor = Monitor::new(opts, timeouts, fingerprint)?;
-    let mut planner_args = vec!["serve".to_string()];
-    planner_args.extend(l.common.iter().cloned());
-    planner_args.extend(a.service.to_flags());
-    if a.lockstep && !a.enforce_deadline {
-        planner_args.push("--lockstep".into());
-    }
     let log_path = out.join("mission.log");
     File::create(&log_path).map_err(|e| io_err(&log_path, e))?;
-    planner_args.extend(["--log".into(), log_path.display().to_string()]);
+    let planner_args = ServeArgs {
+        ipc: IpcArgs::of(opts),
+        scenario: a.scenario.clone(),
+        service: a.service.clone(),
+        lockstep: a.lockstep && !a.enforce_deadline,
+        log: Some(log_path),
+    }
+    .to_argv();
     let me = std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?;
     let child = |e: super::child::ChildError| MissionError::Child(e.to_string());
     let kids = [

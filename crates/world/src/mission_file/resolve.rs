@@ -276,7 +276,9 @@ fn canonical(path: &Path) -> std::path::PathBuf {
     std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
-/// Loads the chart: the water map and the scenario's name for its source.
+/// Loads the chart: the water map, its source (absolute path: the
+/// fingerprint's) and the scenario's name for it (the path as the mission
+/// file's own path and the file's chart entry give it, for reports).
 fn load_chart(
     choice: &ChartChoice<'_>,
     dir: &Path,
@@ -303,15 +305,16 @@ fn load_chart(
             ))
         }
         ChartChoice::Png(png, mpp, k) => {
-            let path = canonical(&dir.join(png));
+            let given = dir.join(png);
+            let path = canonical(&given);
             let chart = Chart::from_png_file(&path, Some(mpp)).map_err(|e| Problem::Chart(e.to_string()))?;
             Ok((
                 Water::Mask(classify(chart, k)?),
                 ChartSource::Png {
-                    path: path.clone(),
+                    path,
                     metres_per_pixel: mpp,
                 },
-                path.display().to_string(),
+                given.display().to_string(),
             ))
         }
         ChartChoice::Land(file, extent) => {
@@ -321,7 +324,8 @@ fn load_chart(
                     "needs [frame] origin = { lat = …, lon = … }: GeoJSON positions are lon/lat",
                 )
             })?;
-            let path = canonical(&dir.join(file));
+            let given = dir.join(file);
+            let path = canonical(&given);
             let shown = path.display().to_string();
             let text = std::fs::read_to_string(&path)
                 .map_err(|e| Problem::Chart(format!("cannot read chart file `{shown}`: {e}")))?;
@@ -330,7 +334,7 @@ fn load_chart(
             Ok((
                 Water::Land(land),
                 ChartSource::LandGeojson { path, extent_m: extent },
-                shown,
+                given.display().to_string(),
             ))
         }
     }

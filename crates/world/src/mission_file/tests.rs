@@ -564,3 +564,14 @@ fn the_shipped_example_missions_resolve() {
         assert!(m.frame.is_some(), "{file} has an origin");
     }
 }
+
+#[test]
+fn a_chart_file_is_named_as_the_mission_path_gives_it_and_fingerprinted_by_its_absolute_path() {
+    // Unit tests run in the crate's folder: a relative path, as a user types one.
+    let relative = Path::new("../../missions/benoits-cove-geojson.toml");
+    let m = load(relative, Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(m.chart, "../../missions/charts/benoits-cove-land.geojson");
+    let absolute = load(&repo_file("missions/benoits-cove-geojson.toml"), Overrides::default()).unwrap();
+    assert!(Path::new(&absolute.chart).is_absolute());
+    assert_eq!(m.world.fingerprint(), absolute.world.fingerprint());
+}
