@@ -213,6 +213,16 @@ struct LinkSlot {
 /// [`LINK_BACKOFF_MAX`] (our choice: the shore notices a loss within its
 /// timeout, 1 s by default; a restart well inside it keeps the gap short).
 const LINK_BACKOFF: Duration = Duration::from_millis(200);
+/// Longest the mission waits at start for the link's ports, before it
+/// starts the others anyway.
+const LINK_READY_WAIT: Duration = Duration::from_secs(3);
+
+/// `link_start` lines the link has written to its events file (one per start,
+/// once its onboard ports are open).
+fn count_link_starts(events: &Path) -> usize {
+    std::fs::read_to_string(events).map_or(0, |t| t.lines().filter(|l| l.contains("\"link_start\"")).count())
+}
+
 /// Longest wait before restarting the link.
 const LINK_BACKOFF_MAX: Duration = Duration::from_secs(5);
 
@@ -305,9 +315,6 @@ pub(super) fn supervise(
         restart_at: None,
         kill_cause: None,
     });
-    for s in &mut slots {
-        s.kid.start(&[]).map_err(child)?;
-    }
     let mut link = match &a.shore {
         Some(endpoint) => {
             let mut args = vec!["link".to_string()];
@@ -321,7 +328,16 @@ pub(super) fn supervise(
             ]);
             let me = std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?;
             let mut kid = Kid::new("link", me, &args, out).map_err(child)?;
+            let journal = out.join("link.jsonl");
+            let starts = count_link_starts(&journal);
             kid.start(&[]).map_err(child)?;
+            // The link first, so that its subscribers exist before the
+            // planner's first plan (plans are not replayed); but only for a
+            // moment: the mission never waits on the link.
+            let t0 = Instant::now();
+            while count_link_starts(&journal) == starts && t0.elapsed() < LINK_READY_WAIT {
+                std::thread::sleep(Duration::from_millis(10));
+            }
             Some(LinkSlot {
                 kid,
                 restart_at: None,
@@ -332,6 +348,9 @@ pub(super) fn supervise(
         }
         None => None,
     };
+    for s in &mut slots {
+        s.kid.start(&[]).map_err(child)?;
+    }
     write_pids(out, &slots, link.as_ref());
     let fault_seed = a.fault_seed.unwrap_or(l.seed);
     let faults = plan_faults(fault_seed, a.faults, budget, &Proc::ALL);
