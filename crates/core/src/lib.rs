@@ -9,6 +9,7 @@
 //! clock of the anytime runner is injected.
 #![warn(missing_docs)]
 
+pub mod capacity;
 pub mod decode;
 pub mod fixtures;
 pub mod instance;

@@ -7,13 +7,18 @@
 use auv_core::fixtures::random_instance;
 use auv_core::instance::{Instance, Objective};
 use auv_core::oplib::BestKnown;
-use auv_core::problem::Problem;
+
 use auv_core::rng::PlannerRng;
 use auv_core::route::RouteStats;
-use auv_core::solver::auto::Auto;
-use auv_core::solver::exact::{ExactSettings, solve_exact};
+
+use auv_core::solver::exact::solve_exact;
 use auv_core::solver::{Budget, Solver, run};
 use auv_core::tsplib::parse_oplib;
+
+// The default capacity class unless a test names another.
+type Problem = auv_core::problem::Problem;
+type Auto = auv_core::solver::auto::Auto;
+type ExactSettings = auv_core::solver::exact::ExactSettings;
 
 const OPLIB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/oplib");
 
@@ -23,7 +28,7 @@ const STEPS: u32 = 40;
 /// Solves `inst` with `auto` (seed 1, [`STEPS`] steps); returns the route's
 /// recomputed figures.
 fn solve(inst: &Instance) -> RouteStats {
-    let p = Problem::from_instance(inst).expect("a plannable instance");
+    let p: Problem = Problem::from_instance(inst).expect("a plannable instance");
     let mut s = Auto::default();
     run(&mut s, &p, &mut PlannerRng::new(1), None, Budget::iterations(STEPS));
     let (r, _) = s.best();
@@ -65,7 +70,7 @@ fn paper_cost_stays_near_the_proved_optimum() {
     for seed in 0..6 {
         let mut inst = random_instance(14, 0.6, 9_000.0, seed);
         inst.objective = Objective::PaperCost { phi1: 0.01, phi2: 1.0 };
-        let p = Problem::from_instance(&inst).unwrap();
+        let p: Problem = Problem::from_instance(&inst).unwrap();
         let exact = solve_exact(&p, &ExactSettings::default()).unwrap();
         assert!(exact.proved_optimal, "seed {seed}");
         let optimum = exact.eval.cost(inst.objective, inst.time_available_s);

@@ -83,7 +83,7 @@ where
         };
         let visited = core.last_state().map_or(&[][..], |s| route_ids(&s.route, s.route_len));
         let mut bad = [0u8; MAX_NODES];
-        if let Some(len) = bad_route(fault, r.route.as_bytes(), snap, visited, &mut bad) {
+        if let Some(len) = bad_route(fault, r.route.ids(), snap, visited, &mut bad) {
             self.plans.publish(&mut |m: &mut Plan| {
                 core.fill_plan(r, m);
                 m.route = bad;
