@@ -582,8 +582,15 @@ fn instances_beyond_128_nodes_solve_in_a_larger_class() {
         let path = write_instance(&dir, &format!("n{n}.json"), &inst);
         let (v, _) = solve_json(&path, &["--algorithm", algorithm, "--iterations", "3"]);
         let route = route_of(&v);
-        assert_eq!((route.first(), route.last()), (Some(&inst.start), Some(&inst.goal)), "{n}");
-        assert!(route.iter().any(|&id| id >= 128), "{n}: no id beyond the 128 class in {route:?}");
+        assert_eq!(
+            (route.first(), route.last()),
+            (Some(&inst.start), Some(&inst.goal)),
+            "{n}"
+        );
+        assert!(
+            route.iter().any(|&id| id >= 128),
+            "{n}: no id beyond the 128 class in {route:?}"
+        );
         let doc: Value = serde_json::from_str(&inst.to_json()).unwrap();
         assert_figures_match(&doc, &v);
     }
