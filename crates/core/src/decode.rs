@@ -16,9 +16,9 @@
 //! Arithmetic (single precision where it only steers, double where it
 //! decides feasibility):
 //! - Priorities are compared as `f32` (an `f64` priority is rounded to the
-//!   nearest `f32` first) at 16 bits of fraction: values closer than about
-//!   2^-16 ≈ 1.5e-5 relative tie, and ties go to the lower node id; NaN
-//!   counts as −∞.
+//!   nearest `f32` first) at 16 bits of fraction (15 in the 256-node class,
+//!   14 in the 512 one): values closer than about 2^-16 ≈ 1.5e-5 relative
+//!   tie, and ties go to the lower node id; NaN counts as −∞.
 //! - The look-ahead test is `reach ≤ slack` in `f32`, with the look-ahead
 //!   rounded up and the time left rounded down ([`f32_up`], [`f32_down`]),
 //!   so a step the `f32` test lets through also fits in exact `f64`: it
@@ -29,8 +29,9 @@
 //!
 //! How it is fast:
 //! - Each priority is packed once per decode into an `i32` *key* whose
-//!   order is the priority order and whose lowest 7 bits hold the node id
-//!   ([`pack_key`]). Choosing the next node is one masked max over the
+//!   order is the priority order and whose lowest bits hold the node id
+//!   ([`pack_key`]: 7 bits up to the 128-node class, 8 and 9 in the 256 and
+//!   512 classes, see [`crate::capacity::id_bits`]). Choosing the next node is one masked max over the
 //!   padded row: `key where reach ≤ slack and unvisited`; the winner's id is
 //!   read back from its bits. With AVX-512 that is one compare and one
 //!   masked integer max per sixteen nodes, the visited set a bit mask in
@@ -1167,13 +1168,7 @@ mod tests {
                 MAX_NODES,
             ),
         ) {
-            let mut inst = random_instance(n, density, budget, seed);
-            // Guarantee connectivity: a chain through every node.
-            for a in 0..n - 1 {
-                if inst.edge_between(a, a + 1).is_none() {
-                    inst.edges.push(Edge { a, b: a + 1, priority: 1.0, risk: 1.0, task_time_s: 0.0 });
-                }
-            }
+            let inst = chained(n, density, budget, seed);
             let p = Problem::from_instance(&inst).unwrap();
             let mut r = Route::new();
             let e = Decoder::new().decode(&p, &raw, &mut r);
@@ -1228,12 +1223,7 @@ mod tests {
                 12 * MAX_NODES,
             ),
         ) {
-            let mut inst = random_instance(n, density, budget, seed);
-            for a in 0..n - 1 {
-                if inst.edge_between(a, a + 1).is_none() {
-                    inst.edges.push(Edge { a, b: a + 1, priority: 1.0, risk: 1.0, task_time_s: 0.0 });
-                }
-            }
+            let inst = chained(n, density, budget, seed);
             let p = Problem::from_instance(&inst).unwrap();
             let stride = padded_len(n);
             let mut single = Decoder::new();
