@@ -764,7 +764,7 @@ fn bad_input_malformed_scenario_file() {
         (json!({"format": "auv-scenario/9"}), "`format`"),
         (
             json!({"nodes": 129}),
-            "`nodes` = 129 exceeds the planner's capacity of 128",
+            "`nodes` = 129 exceeds the real-time planner's capacity of 128",
         ),
         (json!({"nodes": 10, "dynamic": 9}), "`dynamic` = 9"),
         (json!({"sigma_m": -150}), "`sigma_m` = -150"),
