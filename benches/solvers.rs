@@ -11,6 +11,13 @@
 //! turn, so one odd network (some need the decoder's repair far more often)
 //! does not decide the figure.
 //!
+//! The `cpu_class_*` groups time the capacity classes other than 128 (the
+//! one every other group runs): n = 40 in the 64-node class that
+//! `planner solve` picks for it, and the OPLib files kroA200-gen2-50 (201
+//! nodes, 256 class) and rd400-gen2-50 (401 nodes, 512 class) from
+//! `crates/core/tests/data/oplib/`: the stream decode per vector and the
+//! paper's PSO budget.
+//!
 //! Run: `cargo bench --bench solvers -- --warm-up-time 1 --measurement-time 3`
 //! (single-threaded; the medians are what the targets refer to).
 //!
@@ -22,6 +29,7 @@
 //! the other processes still shows).
 use std::hint::black_box;
 
+use auv_core::capacity::nodes_of;
 use auv_core::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN};
 use auv_core::problem::{MAX_NODES, Problem};
 use auv_core::rng::PlannerRng;
@@ -221,12 +229,92 @@ impl Measurement for ThreadCpuTime {
     }
 }
 
+/// An OPLib file of the core's test data as a problem of class `W`.
+fn oplib_problem<const W: usize>(name: &str) -> Problem<W> {
+    let path = format!(
+        "{}/crates/core/tests/data/oplib/gen2/{name}.oplib",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path).expect("the core's test data");
+    let inst = auv_core::tsplib::parse_oplib(&text)
+        .expect("a valid OPLib file")
+        .to_instance(name);
+    Problem::from_instance(&inst).expect("OPLib graphs are complete")
+}
+
+/// The stream decode (per vector) and the paper's PSO budget on `ps`, all
+/// of class `W`, under the id `label`.
+fn class_benches<const W: usize, M: Measurement>(c: &mut Criterion<M>, prefix: &str, label: &str, ps: Vec<Problem<W>>) {
+    const SWARM: usize = 150;
+    let cap = nodes_of(W);
+    let mut rng = PlannerRng::new(7);
+    let pool: Vec<f32> = (0..SWARM * cap)
+        .map(|_| rng.uniform(PRIORITY_MIN, PRIORITY_MAX) as f32)
+        .collect();
+    let mut d = Decoder::<W>::new();
+    let mut g = c.benchmark_group(format!("{prefix}class_decode_stream"));
+    g.throughput(Throughput::Elements(SWARM as u64));
+    let mut k = 0usize;
+    g.bench_function(label, |b| {
+        b.iter(|| {
+            k = k.wrapping_add(1);
+            let mut weight = 0.0;
+            d.decode_stream(
+                &ps[k % ps.len()],
+                SWARM,
+                &|i| &pool[i * cap..(i + 1) * cap],
+                &mut |_, _, e| weight += e.weight,
+            );
+            black_box(weight)
+        })
+    });
+    g.finish();
+    let s = PsoSettings::paper();
+    let mut solver = Pso::<W>::new(s);
+    let mut g = c.benchmark_group(format!("{prefix}class_pso_full_budget"));
+    let mut k = 0u64;
+    g.bench_function(label, |b| {
+        b.iter(|| {
+            k += 1;
+            let mut rng = PlannerRng::new(k);
+            run(
+                &mut solver,
+                &ps[k as usize % ps.len()],
+                &mut rng,
+                None,
+                Budget::iterations(s.iterations),
+            );
+            black_box(solver.best().1.weight)
+        })
+    });
+    g.finish();
+}
+
+/// The classes other than 128 (see the module notes).
+fn classes<M: Measurement>(c: &mut Criterion<M>, prefix: &str) {
+    let config = ScenarioConfig {
+        nodes: 40,
+        ..ScenarioConfig::default()
+    };
+    let map = load_map(&config, 1000).expect("the embedded chart loads");
+    let small: Vec<Problem<1>> = (0..NETWORKS)
+        .map(|k| {
+            let world = World::generate(&config, 1000 + k as u64, &map).expect("the default scenario generates");
+            Problem::from_instance(&world.snapshot("bench")).expect("scenario networks join start and goal")
+        })
+        .collect();
+    class_benches(c, prefix, "c64-n40", small);
+    class_benches(c, prefix, "c256-n201", vec![oplib_problem::<4>("kroA200-gen2-50")]);
+    class_benches(c, prefix, "c512-n401", vec![oplib_problem::<8>("rd400-gen2-50")]);
+}
+
 #[cfg(target_os = "linux")]
 fn cpu(c: &mut Criterion<ThreadCpuTime>) {
     decode(c, "cpu_decode");
     decode_stream(c, "cpu_decode_stream");
     pso(c, "cpu_pso_full_budget");
     bbo(c, "cpu_bbo_full_budget");
+    classes(c, "cpu_");
 }
 
 #[cfg(target_os = "linux")]

@@ -574,9 +574,32 @@ fn bad_input_start_equals_goal() {
 
 #[test]
 fn bad_input_more_nodes_than_capacity() {
-    let inst = random_instance(129, 0.05, 31_000.0, 4);
+    // Beyond the largest capacity class (512 nodes).
+    let inst = random_instance(513, 0.01, 31_000.0, 4);
     let doc: Value = serde_json::from_str(&inst.to_json()).unwrap();
-    assert_input_error(&solve_doc("capacity", &doc), &["129 nodes", "capacity of 128"]);
+    assert_input_error(&solve_doc("capacity", &doc), &["513 nodes", "capacity of 512"]);
+}
+
+#[test]
+fn instances_beyond_128_nodes_solve_in_a_larger_class() {
+    let dir = scratch("large-class");
+    for (n, algorithm) in [(200, "pso"), (450, "bbo"), (300, "auto")] {
+        let inst = random_instance(n, 0.05, 31_000.0, 4);
+        let path = write_instance(&dir, &format!("n{n}.json"), &inst);
+        let (v, _) = solve_json(&path, &["--algorithm", algorithm, "--iterations", "3"]);
+        let route = route_of(&v);
+        assert_eq!(
+            (route.first(), route.last()),
+            (Some(&inst.start), Some(&inst.goal)),
+            "{n}"
+        );
+        assert!(
+            route.iter().any(|&id| id >= 128),
+            "{n}: no id beyond the 128 class in {route:?}"
+        );
+        let doc: Value = serde_json::from_str(&inst.to_json()).unwrap();
+        assert_figures_match(&doc, &v);
+    }
 }
 
 #[test]
@@ -747,7 +770,7 @@ fn bad_input_malformed_scenario_file() {
         (json!({"format": "auv-scenario/9"}), "`format`"),
         (
             json!({"nodes": 129}),
-            "`nodes` = 129 exceeds the planner's capacity of 128",
+            "`nodes` = 129 exceeds the real-time planner's capacity of 128",
         ),
         (json!({"nodes": 10, "dynamic": 9}), "`dynamic` = 9"),
         (json!({"sigma_m": -150}), "`sigma_m` = -150"),

@@ -233,7 +233,7 @@ impl VehicleSim {
         if ids.last().map(|&id| id as usize) != Some(self.goal()) {
             return Err(RejectKind::BadPlan);
         }
-        let mut seen = NodeSet::EMPTY;
+        let mut seen: NodeSet = NodeSet::EMPTY;
         for (k, &id) in ids.iter().enumerate() {
             let id = id as usize;
             if seen.contains(id) || (k > 0 && self.visited.contains(id)) {
@@ -423,8 +423,8 @@ impl VehicleSim {
     }
 
     /// The plan held (empty when none).
-    pub fn plan(&self) -> &[u8] {
-        if self.has_plan { self.plan.as_bytes() } else { &[] }
+    pub fn plan(&self) -> &[u16] {
+        if self.has_plan { self.plan.ids() } else { &[] }
     }
 
     /// Asks for a safe hold: the vehicle takes no more plans, goes on to the
@@ -479,7 +479,10 @@ impl VehicleSim {
         m.needs_answer = u32::from(needs_answer);
         m.stale_plans = self.stale_plans;
         m.route_len = self.route.len() as u32;
-        m.route[..self.route.len()].copy_from_slice(self.route.as_bytes());
+        // Routes here are of the 128-node class: every id fits a byte.
+        for (slot, &id) in m.route.iter_mut().zip(self.route.ids()) {
+            *slot = id as u8;
+        }
     }
 
     /// What the vehicle is doing.

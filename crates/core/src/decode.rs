@@ -16,9 +16,9 @@
 //! Arithmetic (single precision where it only steers, double where it
 //! decides feasibility):
 //! - Priorities are compared as `f32` (an `f64` priority is rounded to the
-//!   nearest `f32` first) at 16 bits of fraction: values closer than about
-//!   2^-16 ≈ 1.5e-5 relative tie, and ties go to the lower node id; NaN
-//!   counts as −∞.
+//!   nearest `f32` first) at 16 bits of fraction (15 in the 256-node class,
+//!   14 in the 512 one): values closer than about 2^-16 ≈ 1.5e-5 relative
+//!   tie, and ties go to the lower node id; NaN counts as −∞.
 //! - The look-ahead test is `reach ≤ slack` in `f32`, with the look-ahead
 //!   rounded up and the time left rounded down ([`f32_up`], [`f32_down`]),
 //!   so a step the `f32` test lets through also fits in exact `f64`: it
@@ -29,8 +29,9 @@
 //!
 //! How it is fast:
 //! - Each priority is packed once per decode into an `i32` *key* whose
-//!   order is the priority order and whose lowest 7 bits hold the node id
-//!   ([`pack_key`]). Choosing the next node is one masked max over the
+//!   order is the priority order and whose lowest bits hold the node id
+//!   ([`pack_key`]: 7 bits up to the 128-node class, 8 and 9 in the 256 and
+//!   512 classes, see [`crate::capacity::id_bits`]). Choosing the next node is one masked max over the
 //!   padded row: `key where reach ≤ slack and unvisited`; the winner's id is
 //!   read back from its bits. With AVX-512 that is one compare and one
 //!   masked integer max per sixteen nodes, the visited set a bit mask in
@@ -53,7 +54,8 @@
 //!   explores near-quickest paths (`Repair::repair`).
 //! - Nothing allocates: every buffer is a fixed array in the [`Decoder`].
 
-use crate::problem::{MAX_NODES, Problem, f32_down};
+use crate::capacity::{DEFAULT_WORDS, NodeSet, PerNode, id_bits};
+use crate::problem::{Problem, f32_down};
 use crate::route::{Route, RouteEval};
 
 /// A priority value the decoder accepts: `f32`, or `f64` (rounded to the
@@ -93,10 +95,7 @@ pub const PRIORITY_MAX: f64 = 100.0;
 /// reach, so no scan takes them.
 pub const SCAN_BLOCK: usize = 16;
 
-const _: () = assert!(
-    MAX_NODES.is_multiple_of(SCAN_BLOCK) && MAX_NODES <= 128,
-    "ids must fit the key's 7 low bits"
-);
+const _: () = assert!(64usize.is_multiple_of(SCAN_BLOCK), "a class is whole scan blocks");
 
 /// Walks [`Decoder::decode_stream`] keeps going at once.
 pub const IN_FLIGHT: usize = 8;
@@ -111,30 +110,40 @@ pub const fn padded_len(n: usize) -> usize {
 /// The key of "no candidate": below every key [`pack_key`] makes.
 pub const NO_KEY: i32 = i32::MIN;
 
-/// Packs priority `p` of node `id` (< 128) into a key: an `i32` that orders
-/// like `p` (NaN as −∞) down to 2^-16 relative, breaks ties towards the
-/// lower id, carries the id in its 7 lowest bits, and is above [`NO_KEY`].
+/// The id field of a key for a class of `W` words: its low
+/// [`id_bits`] bits all set.
 #[inline(always)]
-pub fn pack_key(p: f32, id: usize) -> i32 {
+const fn id_mask<const W: usize>() -> i32 {
+    (1 << id_bits(W)) - 1
+}
+
+/// Packs priority `p` of node `id` (< 64 · W) into a key: an `i32` that
+/// orders like `p` (NaN as −∞) down to 2^-16 relative (2^-14 at 512 nodes,
+/// where the id takes 9 bits), breaks ties towards the lower id, carries
+/// the id in its [`id_bits`] lowest bits, and is above [`NO_KEY`].
+#[inline(always)]
+pub fn pack_key<const W: usize>(p: f32, id: usize) -> i32 {
     // Written with selects and shifts only, so a loop of these vectorises.
     let b = if p.is_nan() { f32::NEG_INFINITY } else { p }.to_bits() as i32;
     // The classic map of IEEE bits onto signed integers: negative values
     // flip every bit but the sign, so larger magnitudes sort lower.
     let mono = b ^ (((b >> 31) as u32) >> 1) as i32;
-    (mono & !0x7F) | (127 - id as i32)
+    let mask = id_mask::<W>();
+    (mono & !mask) | (mask - id as i32)
 }
 
-/// The node id a key carries.
+/// The node id a key of class `W` carries.
 #[inline(always)]
-pub fn key_id(key: i32) -> usize {
-    127 - (key & 0x7F) as usize
+pub fn key_id<const W: usize>(key: i32) -> usize {
+    let mask = id_mask::<W>();
+    (mask - (key & mask)) as usize
 }
 
 /// The largest `key[c]` over columns with `reach[c] ≤ slack`, or
 /// [`NO_KEY`] when there is none (visited keys are [`NO_KEY`]). Branch-free
 /// over fixed blocks, so it vectorises.
 #[inline(always)]
-fn best_key(reach: &[f32], key: &[i32; MAX_NODES], slack: f32, len: usize) -> i32 {
+fn best_key(reach: &[f32], key: &[i32], slack: f32, len: usize) -> i32 {
     let mut acc = [NO_KEY; SCAN_BLOCK];
     for (r, k) in reach[..len]
         .chunks_exact(SCAN_BLOCK)
@@ -164,31 +173,39 @@ fn best_key(reach: &[f32], key: &[i32; MAX_NODES], slack: f32, len: usize) -> i3
 mod avx512 {
     use core::arch::x86_64::*;
 
-    use super::{IN_FLIGHT, MAX_NODES, NO_KEY, SCAN_BLOCK};
+    use super::{IN_FLIGHT, NO_KEY, NodeSet, SCAN_BLOCK};
 
     /// Per column of one row: the running max of the keys of allowed
     /// columns whose reach fits in `slack`, sixteen columns a register
     /// (not yet reduced across the register).
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn scan(reach: &[f32], key: &[i32; MAX_NODES], slack: f32, len: usize, allowed: u128) -> __m512i {
+    fn scan<const W: usize>(reach: &[f32], key: &[i32], slack: f32, len: usize, allowed: NodeSet<W>) -> __m512i {
         // The loads below rely on this (raw pointers, no bounds checks).
-        assert!(len <= reach.len() && len <= MAX_NODES && len.is_multiple_of(SCAN_BLOCK));
+        assert!(len <= reach.len() && len <= key.len() && len <= 64 * W && len.is_multiple_of(SCAN_BLOCK));
         let s = _mm512_set1_ps(slack);
         let mut acc = _mm512_set1_epi32(NO_KEY);
-        // Shifted by a constant each block: a variable 128-bit shift costs
-        // several instructions.
-        let mut rest = allowed;
         let mut base = 0;
-        while base < len {
-            // SAFETY: base + 16 ≤ len ≤ both lengths (asserted above).
-            unsafe {
-                let m =
-                    _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(rest as u16, _mm512_loadu_ps(reach.as_ptr().add(base)), s);
-                acc = _mm512_mask_max_epi32(acc, m, acc, _mm512_loadu_si512(key.as_ptr().add(base).cast()));
+        for word in allowed.0 {
+            // Shifted by a constant each block: cheaper than a variable
+            // shift per block.
+            let mut rest = word;
+            for _ in 0..64 / SCAN_BLOCK {
+                if base >= len {
+                    return acc;
+                }
+                // SAFETY: base + 16 ≤ len ≤ both lengths (asserted above).
+                unsafe {
+                    let m = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(
+                        rest as u16,
+                        _mm512_loadu_ps(reach.as_ptr().add(base)),
+                        s,
+                    );
+                    acc = _mm512_mask_max_epi32(acc, m, acc, _mm512_loadu_si512(key.as_ptr().add(base).cast()));
+                }
+                rest >>= SCAN_BLOCK;
+                base += SCAN_BLOCK;
             }
-            rest >>= SCAN_BLOCK;
-            base += SCAN_BLOCK;
         }
         acc
     }
@@ -196,7 +213,13 @@ mod avx512 {
     /// The best key of one row (see [`super::best_key`]).
     #[target_feature(enable = "avx512f")]
     #[inline]
-    pub(super) fn best_key(reach: &[f32], key: &[i32; MAX_NODES], slack: f32, len: usize, allowed: u128) -> i32 {
+    pub(super) fn best_key<const W: usize>(
+        reach: &[f32],
+        key: &[i32],
+        slack: f32,
+        len: usize,
+        allowed: NodeSet<W>,
+    ) -> i32 {
         _mm512_reduce_max_epi32(scan(reach, key, slack, len, allowed))
     }
 
@@ -220,12 +243,12 @@ mod avx512 {
     /// the shuffles of eight separate reductions).
     #[target_feature(enable = "avx512f")]
     #[inline]
-    pub(super) fn best_keys(
+    pub(super) fn best_keys<const W: usize>(
         rows: [&[f32]; IN_FLIGHT],
-        keys: &[[i32; MAX_NODES]; IN_FLIGHT],
+        keys: &[super::PerNode<i32, W>; IN_FLIGHT],
         slack: &[f32; IN_FLIGHT],
         len: usize,
-        allowed: &[u128; IN_FLIGHT],
+        allowed: &[NodeSet<W>; IN_FLIGHT],
     ) -> [i32; IN_FLIGHT] {
         let a: [__m512i; IN_FLIGHT] = core::array::from_fn(|l| scan(rows[l], &keys[l], slack[l], len, allowed[l]));
         // Halves of two lanes' registers side by side, then their max:
@@ -309,13 +332,13 @@ impl Kernel {
 
 /// The walks in flight, one column per lane (struct of arrays, so one
 /// round steps every lane with independent chains side by side).
-struct Lanes {
+struct Lanes<const W: usize> {
     /// Packed priority keys; with the AVX2/portable scan, [`NO_KEY`] for
     /// visited nodes.
-    key: [[i32; MAX_NODES]; IN_FLIGHT],
-    route: [Route; IN_FLIGHT],
+    key: [PerNode<i32, W>; IN_FLIGHT],
+    route: [Route<W>; IN_FLIGHT],
     /// Visited nodes; all ones for an idle lane (so its scan finds nothing).
-    visited: [u128; IN_FLIGHT],
+    visited: [NodeSet<W>; IN_FLIGHT],
     /// Time of the route so far, s (the next step's slack needs it).
     time_s: [f64; IN_FLIGHT],
     cur: [usize; IN_FLIGHT],
@@ -323,11 +346,11 @@ struct Lanes {
     item: [usize; IN_FLIGHT],
 }
 
-impl Lanes {
+impl<const W: usize> Lanes<W> {
     const EMPTY: Self = Self {
-        key: [[NO_KEY; MAX_NODES]; IN_FLIGHT],
+        key: [PerNode::splat(NO_KEY); IN_FLIGHT],
         route: [Route::new(); IN_FLIGHT],
-        visited: [u128::MAX; IN_FLIGHT],
+        visited: [NodeSet::FULL; IN_FLIGHT],
         time_s: [0.0; IN_FLIGHT],
         cur: [0; IN_FLIGHT],
         item: [0; IN_FLIGHT],
@@ -337,11 +360,11 @@ impl Lanes {
     /// the start. Keys in the padding (n..len) are left as they are: their
     /// reach is +∞, so no scan ever takes them.
     #[inline(always)]
-    fn begin<const AVX512: bool, P: Priority>(&mut self, l: usize, p: &Problem, priorities: &[P], item: usize) {
+    fn begin<const AVX512: bool, P: Priority>(&mut self, l: usize, p: &Problem<W>, priorities: &[P], item: usize) {
         let n = p.n();
         let (keys, prio) = (&mut self.key[l][..n], &priorities[..n]);
         for c in 0..n {
-            keys[c] = pack_key(prio[c].to_f32(), c);
+            keys[c] = pack_key::<W>(prio[c].to_f32(), c);
         }
         let cur = p.start();
         self.route[l].clear();
@@ -349,7 +372,7 @@ impl Lanes {
         if !AVX512 {
             self.key[l][cur] = NO_KEY;
         }
-        self.visited[l] = 1u128 << cur;
+        self.visited[l] = NodeSet::single(cur);
         self.time_s[l] = 0.0;
         self.cur[l] = cur;
         self.item[l] = item;
@@ -359,7 +382,7 @@ impl Lanes {
     /// (reached the goal, or a dead end: their route is left as it was).
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lanes are indexed across several arrays
-    fn round<const AVX512: bool, const W: usize>(&mut self, p: &Problem, limit: f64) -> u32 {
+    fn round<const AVX512: bool, const L: usize>(&mut self, p: &Problem<W>, limit: f64) -> u32 {
         let len = p.stride();
         let mut slack = [0.0f32; IN_FLIGHT];
         let mut best = [NO_KEY; IN_FLIGHT];
@@ -369,13 +392,13 @@ impl Lanes {
                 // SAFETY: only the `*_avx512` streams instantiate AVX512 =
                 // true, and they run only on CPUs with AVX-512F.
                 unsafe {
-                    if W == IN_FLIGHT {
+                    if L == IN_FLIGHT {
                         slack = avx512::slack(limit, &self.time_s);
                         let rows = core::array::from_fn(|l| p.reach_row(self.cur[l]));
                         let allowed = core::array::from_fn(|l| !self.visited[l]);
                         best = avx512::best_keys(rows, &self.key, &slack, len, &allowed);
                     } else {
-                        for l in 0..W {
+                        for l in 0..L {
                             slack[l] = f32_down(limit - self.time_s[l]);
                             let row = p.reach_row(self.cur[l]);
                             best[l] = avx512::best_key(row, &self.key[l], slack[l], len, !self.visited[l]);
@@ -384,24 +407,24 @@ impl Lanes {
                 }
             }
         } else {
-            for l in 0..W {
+            for l in 0..L {
                 slack[l] = f32_down(limit - self.time_s[l]);
                 best[l] = best_key(p.reach_row(self.cur[l]), &self.key[l], slack[l], len);
             }
         }
         let goal = p.goal();
         let mut ended = 0u32;
-        for l in 0..W {
+        for l in 0..L {
             if best[l] == NO_KEY {
                 ended |= 1 << l;
                 continue;
             }
-            let next = key_id(best[l]);
+            let next = key_id::<W>(best[l]);
             // Only the time is kept while walking (the next step waits for
             // it); the other figures are summed once the route is known.
             self.time_s[l] += p.time_s(self.cur[l], next);
             self.route[l].push(next);
-            self.visited[l] |= 1 << next;
+            self.visited[l].insert(next);
             if !AVX512 {
                 self.key[l][next] = NO_KEY;
             }
@@ -417,44 +440,44 @@ impl Lanes {
 /// is called once per vector, in the order walks finish (a function of the
 /// vectors alone, the same on every kernel).
 #[inline(always)]
-fn stream<'a, const AVX512: bool, P: Priority + 'a>(
-    d: &mut Decoder,
-    p: &Problem,
+fn stream<'a, const AVX512: bool, const W: usize, P: Priority + 'a>(
+    d: &mut Decoder<W>,
+    p: &Problem<W>,
     count: usize,
     vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, &Route, RouteEval),
+    done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
 ) {
     // One or two vectors (single and paired decodes) use that many lanes.
     match count {
-        1 => stream_w::<AVX512, 1, P>(d, p, count, vector, done),
-        2 => stream_w::<AVX512, 2, P>(d, p, count, vector, done),
-        _ => stream_w::<AVX512, IN_FLIGHT, P>(d, p, count, vector, done),
+        1 => stream_l::<AVX512, W, 1, P>(d, p, count, vector, done),
+        2 => stream_l::<AVX512, W, 2, P>(d, p, count, vector, done),
+        _ => stream_l::<AVX512, W, IN_FLIGHT, P>(d, p, count, vector, done),
     }
 }
 
-/// [`stream`] on lanes 0..W.
+/// [`stream`] on lanes 0..L.
 #[inline(always)]
-fn stream_w<'a, const AVX512: bool, const W: usize, P: Priority + 'a>(
-    d: &mut Decoder,
-    p: &Problem,
+fn stream_l<'a, const AVX512: bool, const W: usize, const L: usize, P: Priority + 'a>(
+    d: &mut Decoder<W>,
+    p: &Problem<W>,
     count: usize,
     vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, &Route, RouteEval),
+    done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
 ) {
     let limit = p.budget_limit_s();
     let Decoder { lanes, repair } = d;
     let mut live = 0u32;
-    for l in 0..W {
+    for l in 0..L {
         if l < count {
             lanes.begin::<AVX512, P>(l, p, vector(l), l);
             live |= 1 << l;
         } else {
-            lanes.visited[l] = u128::MAX;
+            lanes.visited[l] = NodeSet::FULL;
         }
     }
-    let mut next = count.min(W);
+    let mut next = count.min(L);
     while live != 0 {
-        let mut ended = lanes.round::<AVX512, W>(p, limit) & live;
+        let mut ended = lanes.round::<AVX512, L>(p, limit) & live;
         while ended != 0 {
             let l = ended.trailing_zeros() as usize;
             ended &= ended - 1;
@@ -476,7 +499,7 @@ fn stream_w<'a, const AVX512: bool, const W: usize, P: Priority + 'a>(
                 next += 1;
             } else {
                 live &= !(1 << l);
-                lanes.visited[l] = u128::MAX;
+                lanes.visited[l] = NodeSet::FULL;
             }
         }
     }
@@ -484,76 +507,77 @@ fn stream_w<'a, const AVX512: bool, const W: usize, P: Priority + 'a>(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-fn stream_avx512<'a, P: Priority + 'a>(
-    d: &mut Decoder,
-    p: &Problem,
+fn stream_avx512<'a, const W: usize, P: Priority + 'a>(
+    d: &mut Decoder<W>,
+    p: &Problem<W>,
     count: usize,
     vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, &Route, RouteEval),
+    done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
 ) {
-    stream::<true, P>(d, p, count, vector, done)
+    stream::<true, W, P>(d, p, count, vector, done)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn stream_avx2<'a, P: Priority + 'a>(
-    d: &mut Decoder,
-    p: &Problem,
+fn stream_avx2<'a, const W: usize, P: Priority + 'a>(
+    d: &mut Decoder<W>,
+    p: &Problem<W>,
     count: usize,
     vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, &Route, RouteEval),
+    done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
 ) {
-    stream::<false, P>(d, p, count, vector, done)
+    stream::<false, W, P>(d, p, count, vector, done)
 }
 /// The repair's scratch space (see [`Repair::repair`]).
-struct Repair {
+struct Repair<const W: usize> {
     /// Figures of the route's first i edges, for i = 0..len (filled by
     /// `sum_figures` when a walk needs repair).
-    prefix: [RouteEval; MAX_NODES],
+    prefix: PerNode<RouteEval, W>,
     /// The A* search (see [`Repair::astar_home`]).
-    open: [f64; MAX_NODES],
-    done: [f64; MAX_NODES],
-    order: [u64; MAX_NODES],
+    open: PerNode<f64, W>,
+    done: PerNode<f64, W>,
+    order: PerNode<u64, W>,
     stamp: u64,
     /// Nodes the last search settled, in order.
-    settled: [u8; MAX_NODES],
+    settled: PerNode<u16, W>,
     settled_len: usize,
-    path: [u8; MAX_NODES],
+    path: PerNode<u16, W>,
 }
 
-/// Scratch space for decoding; build once, reuse for every decode.
-pub struct Decoder {
-    lanes: Lanes,
-    repair: Repair,
+/// Scratch space for decoding problems of a class of `W` words (see
+/// [`crate::capacity`]); build once, reuse for every decode.
+pub struct Decoder<const W: usize = DEFAULT_WORDS> {
+    lanes: Lanes<W>,
+    repair: Repair<W>,
 }
 
-impl Default for Decoder {
+impl<const W: usize> Default for Decoder<W> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl Decoder {
+impl<const W: usize> Decoder<W> {
     /// A decoder with its buffers ready.
     pub const fn new() -> Self {
         Self {
             lanes: Lanes::EMPTY,
             repair: Repair {
-                prefix: [RouteEval {
+                prefix: PerNode::splat(RouteEval {
                     time_s: 0.0,
                     distance_m: 0.0,
                     weight: 0.0,
                     risk_ratio_sum: 0.0,
                     tasks: 0,
                     feasible: false,
-                }; MAX_NODES],
-                open: [0.0; MAX_NODES],
-                done: [0.0; MAX_NODES],
-                order: [0; MAX_NODES],
+                }),
+                open: PerNode::splat(0.0),
+                done: PerNode::splat(0.0),
+                order: PerNode::splat(0),
                 stamp: 0,
-                settled: [0; MAX_NODES],
+                settled: PerNode::splat(0),
                 settled_len: 0,
-                path: [0; MAX_NODES],
+                path: PerNode::splat(0),
             },
         }
     }
@@ -561,7 +585,7 @@ impl Decoder {
     /// Decodes `priorities` (at least `p.n()` values) into `out` and returns
     /// the route's figures.
     #[inline]
-    pub fn decode<P: Priority>(&mut self, p: &Problem, priorities: &[P], out: &mut Route) -> RouteEval {
+    pub fn decode<P: Priority>(&mut self, p: &Problem<W>, priorities: &[P], out: &mut Route<W>) -> RouteEval {
         self.decode_with(Kernel::detect(), p, priorities, out)
     }
 
@@ -570,9 +594,9 @@ impl Decoder {
     pub fn decode_with<P: Priority>(
         &mut self,
         kernel: Kernel,
-        p: &Problem,
+        p: &Problem<W>,
         priorities: &[P],
-        out: &mut Route,
+        out: &mut Route<W>,
     ) -> RouteEval {
         let priorities = &priorities[..p.n()];
         let mut result = RouteEval::default();
@@ -588,11 +612,11 @@ impl Decoder {
     #[inline]
     pub fn decode_pair<P: Priority>(
         &mut self,
-        p: &Problem,
+        p: &Problem<W>,
         a: &[P],
         b: &[P],
-        out_a: &mut Route,
-        out_b: &mut Route,
+        out_a: &mut Route<W>,
+        out_b: &mut Route<W>,
     ) -> (RouteEval, RouteEval) {
         let (a, b) = (&a[..p.n()], &b[..p.n()]);
         let mut result = [RouteEval::default(); 2];
@@ -622,10 +646,10 @@ impl Decoder {
     #[inline]
     pub fn decode_stream<'a, P: Priority + 'a>(
         &mut self,
-        p: &Problem,
+        p: &Problem<W>,
         count: usize,
         vector: &dyn Fn(usize) -> &'a [P],
-        done: &mut dyn FnMut(usize, &Route, RouteEval),
+        done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
     ) {
         self.stream_with(Kernel::detect(), p, count, vector, done)
     }
@@ -635,10 +659,10 @@ impl Decoder {
     pub fn stream_with<'a, P: Priority + 'a>(
         &mut self,
         kernel: Kernel,
-        p: &Problem,
+        p: &Problem<W>,
         count: usize,
         vector: &dyn Fn(usize) -> &'a [P],
-        done: &mut dyn FnMut(usize, &Route, RouteEval),
+        done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
     ) {
         match kernel.usable() {
             #[cfg(target_arch = "x86_64")]
@@ -647,19 +671,19 @@ impl Decoder {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `usable` only yields Avx2 on CPUs with AVX2.
             Kernel::Avx2 => unsafe { stream_avx2(self, p, count, vector, done) },
-            _ => stream::<false, P>(self, p, count, vector, done),
+            _ => stream::<false, W, P>(self, p, count, vector, done),
         }
     }
 }
 
-impl Repair {
+impl<const W: usize> Repair<W> {
     /// Sums the figures of `out` edge by edge in route order (the order,
     /// and so the rounding, of a walk accumulating them step by step) and
     /// returns them, not marked feasible; with `PREFIX`, also stores the
     /// figures of the first i edges in `prefix[i]` for every i.
     #[inline(always)]
-    fn sum_figures<const PREFIX: bool>(&mut self, p: &Problem, out: &Route) -> RouteEval {
-        let nodes = out.as_bytes();
+    fn sum_figures<const PREFIX: bool>(&mut self, p: &Problem<W>, out: &Route<W>) -> RouteEval {
+        let nodes = out.ids();
         let mut e = RouteEval {
             weight: p.prize(usize::from(nodes[0])),
             ..RouteEval::default()
@@ -693,7 +717,7 @@ impl Repair {
     /// only near-quickest paths. The last node is tried too: the walk's
     /// `f32` test may have refused a step that just fits in `f64`.
     #[inline(never)]
-    fn repair(&mut self, p: &Problem, out: &mut Route) -> RouteEval {
+    fn repair(&mut self, p: &Problem<W>, out: &mut Route<W>) -> RouteEval {
         self.sum_figures::<true>(p, out);
         let limit = p.budget_limit_s();
         let len = padded_len(p.n());
@@ -718,7 +742,7 @@ impl Repair {
         let mut hops = 0;
         let mut v = p.goal();
         while v != from {
-            self.path[hops] = v as u8;
+            self.path[hops] = v as u16;
             hops += 1;
             v = self.astar_prev(p, v);
         }
@@ -749,7 +773,7 @@ impl Repair {
     /// comparison skips them. Settled nodes record their time in `done`
     /// and a stamp in `order`, and are listed in `settled`.
     #[inline(always)]
-    fn astar_home(&mut self, p: &Problem, route: &Route, k: usize, slack: f64, len: usize) -> bool {
+    fn astar_home(&mut self, p: &Problem<W>, route: &Route<W>, k: usize, slack: f64, len: usize) -> bool {
         let n = p.n();
         let goal = p.goal();
         self.open[..n].fill(f64::INFINITY);
@@ -757,7 +781,7 @@ impl Repair {
         for v in p.excluded().iter() {
             self.open[v] = f64::NAN;
         }
-        for &v in &route.as_bytes()[..k] {
+        for &v in &route.ids()[..k] {
             self.open[usize::from(v)] = f64::NAN;
         }
         self.open[route.get(k)] = 0.0;
@@ -766,22 +790,24 @@ impl Repair {
         loop {
             // Pop the least estimate g + h; the node id rides in the low
             // bits of the key (ties within ~1e-13 relative go to the lower
-            // id), and NaN (settled, blocked, or +∞ + id bits) never wins.
+            // id, ~4e-13 at 512 nodes), and NaN (settled, blocked, or +∞ +
+            // id bits) never wins.
             let open = &self.open;
+            let mask = (1u64 << id_bits(W)) - 1;
             let best = min_of(len, |v| {
                 let f = open[v] + h[v];
-                f64::from_bits(f.to_bits() & !0x7F | v as u64)
+                f64::from_bits(f.to_bits() & !mask | v as u64)
             });
             // +∞ (only node 0's key can be +∞ rather than NaN): unreachable.
             if !(best <= slack && best < f64::INFINITY) {
                 return false;
             }
-            let u = (best.to_bits() & 0x7F) as usize;
+            let u = (best.to_bits() & mask) as usize;
             let g = self.open[u];
             self.done[u] = g;
             self.order[u] = self.stamp;
             self.stamp += 1;
-            self.settled[self.settled_len] = u as u8;
+            self.settled[self.settled_len] = u as u16;
             self.settled_len += 1;
             if u == goal {
                 return true;
@@ -801,7 +827,7 @@ impl Repair {
     /// (the node that set `v`'s time qualifies; settle order rules out
     /// cycles even across zero-time edges).
     #[inline(always)]
-    fn astar_prev(&self, p: &Problem, v: usize) -> usize {
+    fn astar_prev(&self, p: &Problem<W>, v: usize) -> usize {
         let row = p.time_row(v);
         let (dv, ov) = (self.done[v], self.order[v]);
         for &u in &self.settled[..self.settled_len] {
@@ -845,8 +871,14 @@ mod tests {
     use super::*;
     use crate::fixtures::{line_instance, random_instance};
     use crate::instance::{Edge, Instance, Node, Objective};
-    use crate::problem::NodeSet;
+    use crate::problem::MAX_NODES;
     use proptest::prelude::*;
+
+    // The default capacity class unless a test names another.
+    type Problem = crate::problem::Problem;
+    type NodeSet = crate::problem::NodeSet;
+    type Route = crate::route::Route;
+    type Decoder = crate::decode::Decoder;
 
     #[test]
     fn decodes_the_highest_priority_walk() {
@@ -940,7 +972,11 @@ mod tests {
     }
 
     /// Plain Dijkstra from `from` to the goal avoiding `blocked`: (time, path).
-    fn plain_quickest(p: &Problem, from: usize, blocked: &[bool]) -> Option<(f64, Vec<usize>)> {
+    fn plain_quickest<const W: usize>(
+        p: &crate::problem::Problem<W>,
+        from: usize,
+        blocked: &[bool],
+    ) -> Option<(f64, Vec<usize>)> {
         let n = p.n();
         let mut dist = vec![f64::INFINITY; n];
         let mut prev = vec![usize::MAX; n];
@@ -975,7 +1011,7 @@ mod tests {
     /// key's own order is tested apart) among unvisited neighbours that
     /// fit by the f32 test; at a dead end, cut back to the latest r_k whose
     /// quickest path home avoiding r_0..r_{k−1} fits, else the quickest path.
-    fn reference_decode(p: &Problem, prio: &[f64]) -> Vec<usize> {
+    fn reference_decode<const W: usize>(p: &crate::problem::Problem<W>, prio: &[f64]) -> Vec<usize> {
         let mut visited = vec![false; p.n()];
         for v in p.excluded().iter() {
             visited[v] = true;
@@ -994,7 +1030,7 @@ mod tests {
                 if visited[c] || p.reach_row(cur)[c] > slack {
                     continue;
                 }
-                let v = pack_key(prio[c] as f32, c);
+                let v = pack_key::<W>(prio[c] as f32, c);
                 if best.is_none_or(|(b, _)| v > b) {
                     best = Some((v, c));
                 }
@@ -1042,9 +1078,9 @@ mod tests {
         for (i, &a) in values.iter().enumerate() {
             for (j, &b) in values.iter().enumerate() {
                 for (ia, ib) in [(3usize, 90usize), (90, 3), (0, 127)] {
-                    let (ka, kb) = (pack_key(a, ia), pack_key(b, ib));
+                    let (ka, kb) = (pack_key::<2>(a, ia), pack_key::<2>(b, ib));
                     assert!(ka > NO_KEY, "{a}");
-                    assert_eq!(key_id(ka), ia);
+                    assert_eq!(key_id::<2>(ka), ia);
                     if i != j {
                         assert_eq!(ka > kb, a > b, "{a} vs {b}");
                     } else {
@@ -1055,13 +1091,13 @@ mod tests {
             }
         }
         // NaN ranks with −∞ (below every other value, ties by id).
-        assert_eq!(pack_key(f32::NAN, 5), pack_key(f32::NEG_INFINITY, 5));
-        assert_eq!(pack_key(-f32::NAN, 5), pack_key(f32::NEG_INFINITY, 5));
-        assert!(pack_key(f32::NAN, 5) < pack_key(-1e30, 100));
+        assert_eq!(pack_key::<2>(f32::NAN, 5), pack_key::<2>(f32::NEG_INFINITY, 5));
+        assert_eq!(pack_key::<2>(-f32::NAN, 5), pack_key::<2>(f32::NEG_INFINITY, 5));
+        assert!(pack_key::<2>(f32::NAN, 5) < pack_key::<2>(-1e30, 100));
         // Differences of 2^-15 relative survive the packing; 2^-18 tie.
-        assert!(pack_key(-199.99, 9) > pack_key(-200.0, 1));
-        assert!(pack_key(50.002, 9) > pack_key(50.0, 1));
-        assert!(pack_key(50.0002, 9) < pack_key(50.0, 1));
+        assert!(pack_key::<2>(-199.99, 9) > pack_key::<2>(-200.0, 1));
+        assert!(pack_key::<2>(50.002, 9) > pack_key::<2>(50.0, 1));
+        assert!(pack_key::<2>(50.0002, 9) < pack_key::<2>(50.0, 1));
     }
 
     #[test]
@@ -1132,13 +1168,7 @@ mod tests {
                 MAX_NODES,
             ),
         ) {
-            let mut inst = random_instance(n, density, budget, seed);
-            // Guarantee connectivity: a chain through every node.
-            for a in 0..n - 1 {
-                if inst.edge_between(a, a + 1).is_none() {
-                    inst.edges.push(Edge { a, b: a + 1, priority: 1.0, risk: 1.0, task_time_s: 0.0 });
-                }
-            }
+            let inst = chained(n, density, budget, seed);
             let p = Problem::from_instance(&inst).unwrap();
             let mut r = Route::new();
             let e = Decoder::new().decode(&p, &raw, &mut r);
@@ -1146,7 +1176,7 @@ mod tests {
             for kernel in Kernel::available() {
                 let mut other = Route::new();
                 let e2 = Decoder::new().decode_with(kernel, &p, &raw, &mut other);
-                prop_assert_eq!(other.as_bytes(), r.as_bytes(), "kernel {:?}", kernel);
+                prop_assert_eq!(other.ids(), r.ids(), "kernel {:?}", kernel);
                 prop_assert_eq!(e2, e);
             }
             prop_assert_eq!(reference_decode(&p, &raw), r.to_vec());
@@ -1156,7 +1186,7 @@ mod tests {
             let e2 = Decoder::new().decode(&p, &flipped, &mut r2);
             let (mut pa, mut pb) = (Route::new(), Route::new());
             let (ea, eb) = Decoder::new().decode_pair(&p, &raw, &flipped, &mut pa, &mut pb);
-            prop_assert_eq!((pa.as_bytes(), pb.as_bytes()), (r.as_bytes(), r2.as_bytes()));
+            prop_assert_eq!((pa.ids(), pb.ids()), (r.ids(), r2.ids()));
             prop_assert_eq!((ea, eb), (e, e2));
             let checked = p.evaluate(&r);
             prop_assert_eq!(checked, Some(e));
@@ -1193,12 +1223,7 @@ mod tests {
                 12 * MAX_NODES,
             ),
         ) {
-            let mut inst = random_instance(n, density, budget, seed);
-            for a in 0..n - 1 {
-                if inst.edge_between(a, a + 1).is_none() {
-                    inst.edges.push(Edge { a, b: a + 1, priority: 1.0, risk: 1.0, task_time_s: 0.0 });
-                }
-            }
+            let inst = chained(n, density, budget, seed);
             let p = Problem::from_instance(&inst).unwrap();
             let stride = padded_len(n);
             let mut single = Decoder::new();
@@ -1212,7 +1237,7 @@ mod tests {
                 let other = &raw[((i + 1) % count) * stride..][..n];
                 let (mut pa, mut pb) = (Route::new(), Route::new());
                 let (ea, _) = da.decode_pair(&p, row, other, &mut pa, &mut pb);
-                prop_assert_eq!(pa.as_bytes(), r.as_bytes(), "vector {}", i);
+                prop_assert_eq!(pa.ids(), r.ids(), "vector {}", i);
                 prop_assert_eq!(ea, e);
                 let wide: Vec<f64> = row.iter().map(|&x| f64::from(x)).collect();
                 prop_assert_eq!(reference_decode(&p, &wide), r.to_vec());
@@ -1226,7 +1251,7 @@ mod tests {
                 let mut seen = Vec::new();
                 let mut bad = None;
                 da.stream_with(kernel, &p, count, &|i| &raw[i * stride..i * stride + n], &mut |i, r, e| {
-                    if (r.as_bytes(), e) != (singles[i].0.as_bytes(), singles[i].1) {
+                    if (r.ids(), e) != (singles[i].0.ids(), singles[i].1) {
                         bad = Some(i);
                     }
                     seen.push(i);
@@ -1273,6 +1298,76 @@ mod tests {
             prop_assert!(r.iter().all(|v| !ex.contains(v)));
             prop_assert_eq!(reference_decode(&p, &raw), r.to_vec());
             prop_assert_eq!(e.feasible, p.to_goal_s(start) <= p.budget_limit_s());
+        }
+    }
+
+    /// Decodes `raw` on `inst` in class `W` on every kernel; checks the
+    /// route against the plain rule and returns it.
+    fn decode_in_class<const W: usize>(inst: &Instance, raw: &[f64]) -> Vec<usize> {
+        let p = crate::problem::Problem::<W>::from_instance(inst).unwrap();
+        let mut d = super::Decoder::<W>::new();
+        let mut r = crate::route::Route::<W>::new();
+        let e = d.decode(&p, raw, &mut r);
+        for kernel in Kernel::available() {
+            let mut other = crate::route::Route::<W>::new();
+            assert_eq!(d.decode_with(kernel, &p, raw, &mut other), e, "{kernel:?}");
+            assert_eq!(other, r, "{kernel:?}");
+        }
+        assert_eq!(p.evaluate(&r), Some(e));
+        assert_eq!(reference_decode(&p, raw), r.to_vec());
+        r.to_vec()
+    }
+
+    /// A chain through every node keeps a random network connected.
+    fn chained(n: usize, density: f64, budget: f64, seed: u64) -> Instance {
+        let mut inst = random_instance(n, density, budget, seed);
+        for a in 0..n - 1 {
+            if inst.edge_between(a, a + 1).is_none() {
+                inst.edges.push(Edge {
+                    a,
+                    b: a + 1,
+                    priority: 1.0,
+                    risk: 1.0,
+                    task_time_s: 0.0,
+                });
+            }
+        }
+        inst
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        /// The 256- and 512-node classes decode like the plain rule on
+        /// networks that need their ids above 128 and 256.
+        #[test]
+        fn large_classes_decode_like_the_plain_rule(
+            seed in 0u64..10_000,
+            n in 129usize..=512,
+            density in 0.02f64..0.2,
+            budget in 3_000.0f64..60_000.0,
+            raw in proptest::collection::vec(-200.0f64..100.0, 512),
+        ) {
+            let inst = chained(n, density, budget, seed);
+            // Each class is held to the plain rule at its own key precision
+            // (ids take 8 bits at 256 nodes, 9 at 512).
+            decode_in_class::<8>(&inst, &raw);
+            if n <= 256 {
+                decode_in_class::<4>(&inst, &raw);
+            }
+        }
+
+        /// The 64- and 128-node classes keep the same key precision, so
+        /// they decode every vector to the same route.
+        #[test]
+        fn the_64_and_128_classes_decode_alike(
+            seed in 0u64..10_000,
+            n in 2usize..=64,
+            density in 0.05f64..1.0,
+            budget in 1_000.0f64..60_000.0,
+            raw in proptest::collection::vec(-200.0f64..100.0, 64),
+        ) {
+            let inst = chained(n, density, budget, seed);
+            prop_assert_eq!(decode_in_class::<1>(&inst, &raw), decode_in_class::<2>(&inst, &raw));
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The planner's core, with no I/O: the interchange format
 //! ([`instance::Instance`]), the compiled fixed-capacity problem the solvers
-//! read ([`problem::Problem`]), priority-vector decoding ([`decode`]), routes
+//! read ([`problem::Problem`], in capacity classes of 64 to 512 nodes:
+//! [`capacity`]), priority-vector decoding ([`decode`]), routes
 //! and their figures ([`route`]), and the anytime solvers ([`solver`]: PSO and
 //! BBO as in the paper, `auto`, the exact branch-and-bound).
 //!
@@ -9,6 +10,7 @@
 //! clock of the anytime runner is injected.
 #![warn(missing_docs)]
 
+pub mod capacity;
 pub mod decode;
 pub mod fixtures;
 pub mod instance;

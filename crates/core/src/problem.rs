@@ -12,6 +12,8 @@
 //! `instance-format.md` exactly; [`crate::route::RouteStats::from_instance`]
 //! recomputes them independently and the tests hold the two equal.
 
+pub use crate::capacity::NodeSet;
+use crate::capacity::{DEFAULT_WORDS, PerNode, nodes_of};
 use crate::decode::padded_len;
 use crate::instance::{Instance, Objective};
 
@@ -21,75 +23,29 @@ use crate::instance::{Instance, Objective};
 /// against 23 with none, at about the same weight; 900 s was no safer).
 pub const DEFAULT_RESERVE_S: f64 = 300.0;
 
-/// Largest network the planner handles. 128 covers the paper's 40-node
-/// networks, the largest classic orienteering set (66 nodes) and the design's
-/// "at least 128" requirement, and lets a node set be one `u128`.
-pub const MAX_NODES: usize = 128;
+/// Nodes of the default capacity class, the one the real-time service, its
+/// messages and the world generator use. 128 covers the paper's 40-node
+/// networks, the largest classic orienteering set (66 nodes) and the
+/// design's "at least 128" requirement. Offline commands pick a class per
+/// instance ([`crate::capacity::Class`]), up to
+/// [`crate::capacity::LARGEST_NODES`].
+pub const MAX_NODES: usize = nodes_of(DEFAULT_WORDS);
 
 /// Relative tolerance of the feasibility test `T_R ≤ T_available`
 /// (instance format: "within 1e-6 relative").
 pub const FEASIBILITY_REL_TOL: f64 = 1e-6;
 
-/// A set of node ids, one bit per node.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct NodeSet(pub u128);
-
-impl NodeSet {
-    /// The empty set.
-    pub const EMPTY: Self = Self(0);
-
-    /// Adds `i`.
-    #[inline]
-    pub fn insert(&mut self, i: usize) {
-        self.0 |= 1u128 << i;
-    }
-
-    /// Removes `i`.
-    #[inline]
-    pub fn remove(&mut self, i: usize) {
-        self.0 &= !(1u128 << i);
-    }
-
-    /// Whether `i` is in the set.
-    #[inline]
-    pub fn contains(self, i: usize) -> bool {
-        self.0 >> i & 1 == 1
-    }
-
-    /// Number of members.
-    #[inline]
-    pub fn len(self) -> u32 {
-        self.0.count_ones()
-    }
-
-    /// Whether the set is empty.
-    #[inline]
-    pub fn is_empty(self) -> bool {
-        self.0 == 0
-    }
-
-    /// Members in increasing order.
-    #[inline]
-    pub fn iter(self) -> impl Iterator<Item = usize> {
-        let mut bits = self.0;
-        core::iter::from_fn(move || {
-            if bits == 0 {
-                None
-            } else {
-                let i = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                Some(i)
-            }
-        })
-    }
-}
-
 /// Why a problem could not be built.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum ProblemError {
-    /// More nodes than [`MAX_NODES`].
-    #[error("{0} nodes exceed the planner's capacity of {MAX_NODES}")]
-    TooManyNodes(usize),
+    /// More nodes than the problem's capacity class holds.
+    #[error("{n} nodes exceed the capacity of {capacity} nodes")]
+    TooManyNodes {
+        /// Node count.
+        n: usize,
+        /// Nodes the class holds.
+        capacity: usize,
+    },
     /// Fewer than two nodes.
     #[error("a route needs at least 2 nodes, got {0}")]
     TooFewNodes(usize),
@@ -148,15 +104,29 @@ impl EdgeData {
     };
 }
 
-/// Entries of one dense per-pair table.
-const CELLS: usize = MAX_NODES * MAX_NODES;
+/// A dense per-pair table for a class of `W` words: `64 · W` rows of
+/// `64 · W` entries, nested so its size follows from `W`; used flat
+/// ([`flat`]).
+type Table<T, const W: usize> = [[[[T; 64]; W]; 64]; W];
 
-/// Dense per-pair tables, boxed because they are large (704 KiB). Each is
-/// row-major with a row stride of `padded_len(n)` (n rounded up to the
-/// decoder's scan block), not `MAX_NODES`, so a small problem's rows sit
-/// together (13 KiB of look-ahead at n = 40 instead of 40 rows spread 1 KiB
-/// apart). Entry (a, b) is at `a * stride + b`.
-struct Tables {
+/// The entries of a table, row-major.
+#[inline(always)]
+fn flat<T, const W: usize>(t: &Table<T, W>) -> &[T] {
+    t.as_flattened().as_flattened().as_flattened()
+}
+
+/// [`flat`], mutable.
+#[inline(always)]
+fn flat_mut<T, const W: usize>(t: &mut Table<T, W>) -> &mut [T] {
+    t.as_flattened_mut().as_flattened_mut().as_flattened_mut()
+}
+
+/// Dense per-pair tables, boxed because they are large (704 KiB at 128
+/// nodes). Each is row-major with a row stride of `padded_len(n)` (n
+/// rounded up to the decoder's scan block), not the capacity, so a small
+/// problem's rows sit together (13 KiB of look-ahead at n = 40 instead of
+/// 40 rows spread 1 KiB apart). Entry (a, b) is at `a * stride + b`.
+struct Tables<const W: usize> {
     /// Look-ahead: T_ab + shortest time from b to the goal, rounded *up* to
     /// `f32` ([`f32_up`]); +∞ where there is no edge or b is excluded (and in
     /// every padding column n..stride, which the decoder's padded scan
@@ -164,18 +134,45 @@ struct Tables {
     /// left rounded *down* ([`f32_down`]), so an `f32` pass is never a step
     /// the exact `f64` test would refuse. `f32` puts sixteen candidates in
     /// one AVX-512 compare. Scanned whole rows at a time, so kept apart.
-    reach_s: [f32; CELLS],
+    reach_s: Table<f32, W>,
     /// Edge time T_ab, s; +∞ where there is no edge. Duplicates
     /// `edge[..].time_s` so [`Problem::time_row`] can hand out a row, and so
     /// the decoder's step → time → next step chain loads from this small
     /// table rather than the 4× larger `edge`.
-    time_s: [f64; CELLS],
+    time_s: Table<f64, W>,
     /// Everything a step a → b adds to a route's figures.
-    edge: [EdgeData; CELLS],
+    edge: Table<EdgeData, W>,
 }
 
-/// One routing problem, ready for the solvers.
-pub struct Problem {
+impl<const W: usize> Tables<W> {
+    /// Entries of each table.
+    const CELLS: usize = nodes_of(W) * nodes_of(W);
+
+    /// Every table "no edge", built directly on the heap (the value is too
+    /// large for small thread stacks on its way into a Box).
+    fn new_boxed() -> Box<Self> {
+        let mut b = Box::<Self>::new_uninit();
+        let p = b.as_mut_ptr();
+        // SAFETY: each table is a plain nested array of Copy values with no
+        // padding between entries, so `CELLS` consecutive writes through a
+        // pointer to its first entry initialise it whole.
+        unsafe {
+            let reach = core::ptr::addr_of_mut!((*p).reach_s).cast::<f32>();
+            let time = core::ptr::addr_of_mut!((*p).time_s).cast::<f64>();
+            let edge = core::ptr::addr_of_mut!((*p).edge).cast::<EdgeData>();
+            for cell in 0..Self::CELLS {
+                reach.add(cell).write(f32::INFINITY);
+                time.add(cell).write(f64::INFINITY);
+                edge.add(cell).write(EdgeData::NONE);
+            }
+            b.assume_init()
+        }
+    }
+}
+
+/// One routing problem, ready for the solvers, for up to `64 · W` nodes
+/// (see [`crate::capacity`]).
+pub struct Problem<const W: usize = DEFAULT_WORDS> {
     n: usize,
     /// Row stride of the tables: `padded_len(n)`.
     stride: usize,
@@ -183,36 +180,20 @@ pub struct Problem {
     goal: usize,
     budget_s: f64,
     objective: Objective,
-    adjacency: [NodeSet; MAX_NODES],
-    excluded: NodeSet,
-    prize: [f64; MAX_NODES],
-    to_goal_s: [f64; MAX_NODES],
-    tables: Box<Tables>,
+    adjacency: PerNode<NodeSet<W>, W>,
+    excluded: NodeSet<W>,
+    prize: PerNode<f64, W>,
+    to_goal_s: PerNode<f64, W>,
+    tables: Box<Tables<W>>,
 }
 
-impl Problem {
+impl<const W: usize> Problem<W> {
+    /// Nodes this problem's class holds.
+    pub const CAPACITY: usize = nodes_of(W);
+
     /// An empty problem with every buffer allocated. Load it with
     /// [`Problem::load_instance`] or `begin`/`set_edge`/`finish`.
     pub fn new() -> Self {
-        // Build the large table directly on the heap (a 640 KiB value would
-        // overflow small thread stacks on its way into the Box).
-        let tables: Box<Tables> = {
-            let mut v: Vec<Tables> = Vec::with_capacity(1);
-            // SAFETY: Tables is plain f64 arrays; we initialise every field
-            // before use by writing the whole value through the raw pointer.
-            unsafe {
-                let p = v.as_mut_ptr();
-                for cell in 0..CELLS {
-                    (*p).reach_s[cell] = f32::INFINITY;
-                    (*p).time_s[cell] = f64::INFINITY;
-                    (*p).edge[cell] = EdgeData::NONE;
-                }
-                v.set_len(1);
-            }
-            let slice = v.into_boxed_slice();
-            // SAFETY: a boxed slice of exactly one element has the layout of a Box<T>.
-            unsafe { Box::from_raw(Box::into_raw(slice) as *mut Tables) }
-        };
         Self {
             n: 0,
             stride: 0,
@@ -220,11 +201,11 @@ impl Problem {
             goal: 0,
             budget_s: 0.0,
             objective: Objective::MaxWeight,
-            adjacency: [NodeSet::EMPTY; MAX_NODES],
+            adjacency: PerNode::splat(NodeSet::EMPTY),
             excluded: NodeSet::EMPTY,
-            prize: [0.0; MAX_NODES],
-            to_goal_s: [f64::INFINITY; MAX_NODES],
-            tables,
+            prize: PerNode::splat(0.0),
+            to_goal_s: PerNode::splat(f64::INFINITY),
+            tables: Tables::new_boxed(),
         }
     }
 
@@ -242,7 +223,7 @@ impl Problem {
         &mut self,
         inst: &Instance,
         start: usize,
-        excluded: NodeSet,
+        excluded: NodeSet<W>,
         budget_s: f64,
     ) -> Result<(), ProblemError> {
         if !(inst.speed_mps.is_finite() && inst.speed_mps > 0.0) {
@@ -274,10 +255,13 @@ impl Problem {
         goal: usize,
         budget_s: f64,
         objective: Objective,
-        excluded: NodeSet,
+        excluded: NodeSet<W>,
     ) -> Result<(), ProblemError> {
-        if n > MAX_NODES {
-            return Err(ProblemError::TooManyNodes(n));
+        if n > Self::CAPACITY {
+            return Err(ProblemError::TooManyNodes {
+                n,
+                capacity: Self::CAPACITY,
+            });
         }
         if n < 2 {
             return Err(ProblemError::TooFewNodes(n));
@@ -300,9 +284,9 @@ impl Problem {
         // one will use (its padding columns must read +∞).
         let stride = padded_len(n);
         let used = (self.n * self.stride).max(n * stride);
-        self.tables.time_s[..used].fill(f64::INFINITY);
-        self.tables.reach_s[..used].fill(f32::INFINITY);
-        self.tables.edge[..used].fill(EdgeData::NONE);
+        flat_mut(&mut self.tables.time_s)[..used].fill(f64::INFINITY);
+        flat_mut(&mut self.tables.reach_s)[..used].fill(f32::INFINITY);
+        flat_mut(&mut self.tables.edge)[..used].fill(EdgeData::NONE);
         let rows = self.n.max(n);
         self.adjacency[..rows].fill(NodeSet::EMPTY);
         self.prize[..rows].fill(0.0);
@@ -312,8 +296,7 @@ impl Problem {
         self.goal = goal;
         self.budget_s = budget_s;
         self.objective = objective;
-        let all = if n == 128 { u128::MAX } else { (1u128 << n) - 1 };
-        self.excluded = NodeSet(excluded.0 & all);
+        self.excluded = excluded & NodeSet::first(n);
         Ok(())
     }
 
@@ -334,9 +317,9 @@ impl Problem {
         let t = &mut self.tables;
         for (u, v) in [(a, b), (b, a)] {
             let cell = u * self.stride + v;
-            t.time_s[cell] = time_s;
+            flat_mut(&mut t.time_s)[cell] = time_s;
             // Prizes are added to the gain in `finish`, once every prize is known.
-            t.edge[cell] = EdgeData {
+            flat_mut(&mut t.edge)[cell] = EdgeData {
                 time_s,
                 distance_m,
                 gain: weight,
@@ -350,16 +333,18 @@ impl Problem {
     /// shortest time to the goal and the look-ahead table.
     pub fn finish(&mut self) -> Result<(), ProblemError> {
         let (n, stride) = (self.n, self.stride);
+        let edge = flat_mut(&mut self.tables.edge);
         for u in 0..n {
             for v in self.adjacency[u].iter() {
-                self.tables.edge[u * stride + v].gain += self.prize[v];
+                edge[u * stride + v].gain += self.prize[v];
             }
         }
         self.shortest_times_to_goal();
+        let (time, reach) = (flat(&self.tables.time_s), flat_mut(&mut self.tables.reach_s));
         for u in 0..n {
             for v in 0..n {
                 let cell = u * stride + v;
-                self.tables.reach_s[cell] = f32_up(self.tables.time_s[cell] + self.to_goal_s[v]);
+                reach[cell] = f32_up(time[cell] + self.to_goal_s[v]);
             }
         }
         if !self.to_goal_s[self.start].is_finite() {
@@ -391,7 +376,7 @@ impl Problem {
             }
             done.insert(u);
             for v in self.adjacency[u].iter() {
-                let cand = best + self.tables.time_s[u * self.stride + v];
+                let cand = best + flat(&self.tables.time_s)[u * self.stride + v];
                 if cand < self.to_goal_s[v] {
                     self.to_goal_s[v] = cand;
                 }
@@ -432,12 +417,12 @@ impl Problem {
     }
     /// Neighbours of `u` (excluded nodes removed).
     #[inline]
-    pub fn neighbours(&self, u: usize) -> NodeSet {
+    pub fn neighbours(&self, u: usize) -> NodeSet<W> {
         self.adjacency[u]
     }
     /// Nodes removed from this problem (already visited in a mission).
     #[inline]
-    pub fn excluded(&self) -> NodeSet {
+    pub fn excluded(&self) -> NodeSet<W> {
         self.excluded
     }
     /// Whether `a`–`b` is an edge.
@@ -454,7 +439,7 @@ impl Problem {
     /// Edge time, s (+∞ when no edge).
     #[inline]
     pub fn time_s(&self, a: usize, b: usize) -> f64 {
-        self.tables.time_s[a * self.stride + b]
+        flat(&self.tables.time_s)[a * self.stride + b]
     }
     /// Edge length, m.
     #[inline]
@@ -484,29 +469,29 @@ impl Problem {
     /// Shortest time from every node to the goal, s (first `n` entries
     /// meaningful; the rest may be stale).
     #[inline]
-    pub(crate) fn to_goal_row(&self) -> &[f64; MAX_NODES] {
+    pub(crate) fn to_goal_row(&self) -> &[f64] {
         &self.to_goal_s
     }
     /// Row `u` (< n) of the look-ahead table (`f32`, rounded up):
     /// [`Problem::stride`] entries, +∞ in the padding columns n..stride.
     #[inline]
     pub fn reach_row(&self, u: usize) -> &[f32] {
-        &self.tables.reach_s[u * self.stride..(u + 1) * self.stride]
+        &flat(&self.tables.reach_s)[u * self.stride..(u + 1) * self.stride]
     }
     /// Everything the step `a → b` adds to a route (one cache line).
     #[inline]
     pub(crate) fn edge(&self, a: usize, b: usize) -> &EdgeData {
-        &self.tables.edge[a * self.stride + b]
+        &flat(&self.tables.edge)[a * self.stride + b]
     }
     /// Row `u` (< n) of the edge-time table: [`Problem::stride`] entries,
     /// +∞ in the padding columns.
     #[inline]
     pub fn time_row(&self, u: usize) -> &[f64] {
-        &self.tables.time_s[u * self.stride..(u + 1) * self.stride]
+        &flat(&self.tables.time_s)[u * self.stride..(u + 1) * self.stride]
     }
 }
 
-impl Default for Problem {
+impl<const W: usize> Default for Problem<W> {
     fn default() -> Self {
         Self::new()
     }
@@ -548,6 +533,10 @@ pub fn edge_time_s(distance_m: f64, speed_mps: f64, task_time_s: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::fixtures::line_instance;
+
+    // The default capacity class unless a test names another.
+    type Problem = crate::problem::Problem;
+    type NodeSet = crate::problem::NodeSet;
 
     #[test]
     fn tables_follow_the_format_formulas() {
@@ -655,24 +644,12 @@ mod tests {
         big.nodes = vec![big.nodes[0]; MAX_NODES + 1];
         assert!(matches!(
             Problem::from_instance(&big),
-            Err(ProblemError::TooManyNodes(129))
+            Err(ProblemError::TooManyNodes { n: 129, capacity: 128 })
         ));
         let mut p = Problem::new();
         assert!(matches!(
             p.begin(4, 0, 3, f64::NAN, Objective::MaxWeight, NodeSet::EMPTY),
             Err(ProblemError::BadBudget(_))
         ));
-    }
-
-    #[test]
-    fn node_set_basics() {
-        let mut s = NodeSet::EMPTY;
-        s.insert(0);
-        s.insert(127);
-        s.insert(5);
-        assert_eq!(s.iter().collect::<Vec<_>>(), vec![0, 5, 127]);
-        s.remove(5);
-        assert!(!s.contains(5));
-        assert_eq!(s.len(), 2);
     }
 }

@@ -6,37 +6,42 @@
 //! [`Instance`] and a route alone, the way an outside checker does
 //! (`instance-format.md`, "Derived quantities"). Tests hold the two equal.
 
+use crate::capacity::{DEFAULT_WORDS, PerNode, nodes_of};
 use crate::instance::{Instance, Objective};
-use crate::problem::{FEASIBILITY_REL_TOL, MAX_NODES, Problem};
+use crate::problem::{FEASIBILITY_REL_TOL, Problem};
 
-/// A node sequence of at most [`MAX_NODES`] ids. Equality compares the
-/// sequences only (bytes past `len` are scratch).
+/// A node sequence of at most `64 · W` ids (the capacity class, see
+/// [`crate::capacity`]). Equality compares the sequences only (entries past
+/// `len` are scratch).
 #[derive(Clone, Copy)]
-pub struct Route {
-    nodes: [u8; MAX_NODES],
+pub struct Route<const W: usize = DEFAULT_WORDS> {
+    nodes: PerNode<u16, W>,
     len: usize,
 }
 
-const _: () = assert!(MAX_NODES <= 256, "node ids are stored as u8");
+const _: () = assert!(crate::capacity::LARGEST_NODES <= 1 << 16, "node ids are stored as u16");
 
-impl Route {
+impl<const W: usize> Route<W> {
+    /// Most nodes a route of this class holds.
+    pub const CAPACITY: usize = nodes_of(W);
+
     /// The empty route.
     pub const fn new() -> Self {
         Self {
-            nodes: [0; MAX_NODES],
+            nodes: PerNode::splat(0),
             len: 0,
         }
     }
 
-    /// Builds a route from ids; `None` when there are more than
-    /// [`MAX_NODES`] or an id does not fit.
+    /// Builds a route from ids; `None` when there are more than the class
+    /// holds or an id does not fit.
     pub fn from_slice(ids: &[usize]) -> Option<Self> {
-        if ids.len() > MAX_NODES {
+        if ids.len() > Self::CAPACITY {
             return None;
         }
         let mut r = Self::new();
         for &id in ids {
-            if id >= MAX_NODES {
+            if id >= Self::CAPACITY {
                 return None;
             }
             r.push(id);
@@ -44,10 +49,10 @@ impl Route {
         Some(r)
     }
 
-    /// Appends `id` (caller keeps len ≤ MAX_NODES, which a simple path does).
+    /// Appends `id` (caller keeps len within the class, which a simple path does).
     #[inline]
     pub fn push(&mut self, id: usize) {
-        self.nodes[self.len] = id as u8;
+        self.nodes[self.len] = id as u16;
         self.len += 1;
     }
 
@@ -92,18 +97,18 @@ impl Route {
         self.nodes[..self.len].iter().map(|&b| b as usize)
     }
 
-    /// The ids as raw bytes (for fixed-size messages).
+    /// The ids in order, as stored.
     #[inline]
-    pub fn as_bytes(&self) -> &[u8] {
+    pub fn ids(&self) -> &[u16] {
         &self.nodes[..self.len]
     }
 
     /// Inserts `id` at position `i ≤ len`, shifting the rest back (caller
-    /// keeps len < MAX_NODES).
+    /// keeps len below the class's capacity).
     #[inline]
     pub fn insert(&mut self, i: usize, id: usize) {
         self.nodes.copy_within(i..self.len, i + 1);
-        self.nodes[i] = id as u8;
+        self.nodes[i] = id as u16;
         self.len += 1;
     }
 
@@ -124,7 +129,7 @@ impl Route {
     /// node now at position `k` (outside the segment), reversed when `rev`.
     pub fn relocate(&mut self, i: usize, l: usize, k: usize, rev: bool) {
         debug_assert!(l <= 3 && !(i..i + l).contains(&k) && k + 1 != i);
-        let mut seg = [0u8; 3];
+        let mut seg = [0u16; 3];
         seg[..l].copy_from_slice(&self.nodes[i..i + l]);
         if rev {
             seg[..l].reverse();
@@ -146,21 +151,21 @@ impl Route {
     }
 }
 
-impl Default for Route {
+impl<const W: usize> Default for Route<W> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl PartialEq for Route {
+impl<const W: usize> PartialEq for Route<W> {
     fn eq(&self, other: &Self) -> bool {
-        self.as_bytes() == other.as_bytes()
+        self.ids() == other.ids()
     }
 }
 
-impl Eq for Route {}
+impl<const W: usize> Eq for Route<W> {}
 
-impl core::fmt::Debug for Route {
+impl<const W: usize> core::fmt::Debug for Route<W> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_list().entries(self.iter()).finish()
     }
@@ -198,14 +203,14 @@ impl RouteEval {
     }
 }
 
-impl Problem {
+impl<const W: usize> Problem<W> {
     /// Evaluates `route` on this problem; `None` when it is not a valid
     /// route (wrong ends, a repeated or excluded node, a non-edge).
-    pub fn evaluate(&self, route: &Route) -> Option<RouteEval> {
+    pub fn evaluate(&self, route: &Route<W>) -> Option<RouteEval> {
         if route.len() < 2 || route.get(0) != self.start() || route.last() != Some(self.goal()) {
             return None;
         }
-        let mut seen = crate::problem::NodeSet::EMPTY;
+        let mut seen = crate::problem::NodeSet::<W>::EMPTY;
         let mut e = RouteEval {
             weight: self.prize(self.start()),
             ..RouteEval::default()
@@ -380,7 +385,9 @@ impl RouteStats {
 
 #[cfg(test)]
 mod equality_tests {
-    use super::Route;
+
+    // The default capacity class unless a test names another.
+    type Route = crate::route::Route;
 
     #[test]
     fn equal_sequences_are_equal_whatever_the_scratch_bytes() {

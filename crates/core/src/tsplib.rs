@@ -595,8 +595,12 @@ impl OplibInstance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::Problem;
-    use crate::route::{Route, RouteStats};
+
+    use crate::route::RouteStats;
+
+    // The default capacity class unless a test names another.
+    type Problem = crate::problem::Problem;
+    type Route = crate::route::Route;
 
     const EUC: &str = "NAME : tiny\nTYPE : OP\nCOMMENT : four cities\nDIMENSION : 4\nCOST_LIMIT : 20\n\
         EDGE_WEIGHT_TYPE : EUC_2D\nNODE_COORD_SECTION\n1 0 0\n2 3 4\n3 6 8.4\n4 0 5.5\n\

@@ -11,13 +11,20 @@ use std::time::Instant;
 
 use auv_core::fixtures::random_instance;
 use auv_core::instance::{Edge, Instance, Objective};
-use auv_core::problem::Problem;
+
 use auv_core::rng::PlannerRng;
-use auv_core::route::{Route, RouteEval, RouteStats};
-use auv_core::solver::auto::{Auto, AutoSettings};
-use auv_core::solver::bbo::{Bbo, BboSettings};
-use auv_core::solver::pso::{Pso, PsoSettings};
+use auv_core::route::{RouteEval, RouteStats};
+use auv_core::solver::auto::AutoSettings;
+use auv_core::solver::bbo::BboSettings;
+use auv_core::solver::pso::PsoSettings;
 use auv_core::solver::{Algorithm, Budget, Solver, StopReason, run};
+
+// The default capacity class unless a test names another.
+type Problem = auv_core::problem::Problem;
+type Route = auv_core::route::Route;
+type Pso = auv_core::solver::pso::Pso;
+type Bbo = auv_core::solver::bbo::Bbo;
+type Auto = auv_core::solver::auto::Auto;
 
 /// The paper's model on a random network, with a chain added so every
 /// instance is connected (tiny or sparse ones may not be otherwise).
@@ -116,7 +123,7 @@ fn best_so_far_only_improves<S: Solver>(make: impl Fn() -> S) {
         for _ in 0..25 {
             s.step(&p, &mut rng);
             let (r, f) = checked_best(&s, &inst, &p);
-            if r.as_bytes() != route.as_bytes() || f != e {
+            if r.ids() != route.ids() || f != e {
                 assert!(p.better(&f, &e), "the best changed without improving");
                 changes += 1;
             }

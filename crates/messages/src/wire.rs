@@ -456,17 +456,18 @@ pub fn corrupt_state(f: Fault, s: &mut VehicleState, n: usize) -> bool {
 /// when the fault cannot be built now (e.g. nothing visited yet).
 pub fn bad_route(
     f: Fault,
-    good: &[u8],
+    good: &[u16],
     snap: &WaypointSnapshot,
     visited: &[u8],
     out: &mut [u8; MAX_NODES],
 ) -> Option<usize> {
-    let (&first, &goal) = (good.first()?, good.last()?);
+    // Plans carry ids below MAX_NODES (the service's class), so a byte each.
+    let (first, goal) = (*good.first()? as u8, *good.last()? as u8);
     if first == goal {
         return None;
     }
     let n = (snap.node_count as usize).min(MAX_NODES);
-    let mut seen = NodeSet::EMPTY;
+    let mut seen: NodeSet = NodeSet::EMPTY;
     for &v in visited {
         seen.insert(v as usize);
     }
@@ -590,20 +591,36 @@ mod tests {
         let s = snapshot(&w, 0);
         let (start, goal) = (s.start as u8, s.goal as u8);
         let mut out = [0u8; MAX_NODES];
-        let len = bad_route(Fault::NonEdge, &[start, goal], &s, &[start], &mut out).unwrap();
+        let len = bad_route(
+            Fault::NonEdge,
+            &[u16::from(start), u16::from(goal)],
+            &s,
+            &[start],
+            &mut out,
+        )
+        .unwrap();
         let r = &out[..len];
         assert_eq!((r[0], r[len - 1]), (start, goal));
         assert!(crate::network::find_edge(&s, r[0] as usize, r[1] as usize).is_none());
         // Nothing visited but the start: no visited-node plan can be built yet.
         assert_eq!(
-            bad_route(Fault::VisitedNode, &[start, goal], &s, &[start], &mut out),
+            bad_route(
+                Fault::VisitedNode,
+                &[u16::from(start), u16::from(goal)],
+                &s,
+                &[start],
+                &mut out
+            ),
             None
         );
-        let len = bad_route(Fault::VisitedNode, &[3, goal], &s, &[start, 3], &mut out).unwrap();
+        let len = bad_route(Fault::VisitedNode, &[3, u16::from(goal)], &s, &[start, 3], &mut out).unwrap();
         assert_eq!(&out[..len], &[3, start, goal]);
-        let len = bad_route(Fault::BadPlan, &[3, goal], &s, &[start, 3], &mut out).unwrap();
+        let len = bad_route(Fault::BadPlan, &[3, u16::from(goal)], &s, &[start, 3], &mut out).unwrap();
         assert_eq!(&out[..len], &[goal]);
-        assert_eq!(bad_route(Fault::OffWater, &[3, goal], &s, &[start, 3], &mut out), None);
+        assert_eq!(
+            bad_route(Fault::OffWater, &[3, u16::from(goal)], &s, &[start, 3], &mut out),
+            None
+        );
     }
 
     #[test]

@@ -94,6 +94,9 @@ impl Default for ServiceConfig {
 /// planning figures: no wall-clock values, so a lockstep run logs the same
 /// bytes every time.
 #[derive(Clone, Copy, Debug, PartialEq)]
+// The plan's route (u16 ids since the capacity classes) makes one variant
+// large; events go to a callback by reference, never stored in bulk.
+#[allow(clippy::large_enum_variant)]
 pub enum ServiceEvent {
     /// A waypoint snapshot was applied.
     SensorUpdate {
@@ -898,7 +901,10 @@ impl PlannerCore {
         m.fallback = u32::from(!r.eval.feasible);
         m.replan = r.replan;
         m.route_len = r.route.len() as u32;
-        m.route[..r.route.len()].copy_from_slice(r.route.as_bytes());
+        // The service runs the 128-node class, so every id fits a byte.
+        for (slot, &id) in m.route.iter_mut().zip(r.route.ids()) {
+            *slot = id as u8;
+        }
     }
 
     /// Records that the plan for `r` was published at `published_ns`.

@@ -80,9 +80,13 @@ impl<O: Outbox<Plan>> PlanOutbox for FaultyPlans<O> {
     fn publish_plan(&mut self, ctx: PlanContext<'_>, fill: &mut dyn FnMut(&mut Plan)) -> Result<u64, TransportError> {
         if let (Some(fault), Some(snap)) = (self.faults.advance(), ctx.snapshot) {
             fill(&mut self.scratch);
-            let good = &self.scratch.route[..(self.scratch.route_len as usize).min(MAX_NODES)];
+            let len = (self.scratch.route_len as usize).min(MAX_NODES);
+            let mut good = [0u16; MAX_NODES];
+            for (g, &id) in good.iter_mut().zip(&self.scratch.route[..len]) {
+                *g = u16::from(id);
+            }
             let mut bad = [0u8; MAX_NODES];
-            if let Some(len) = bad_route(fault, good, snap, ctx.visited, &mut bad) {
+            if let Some(len) = bad_route(fault, &good[..len], snap, ctx.visited, &mut bad) {
                 self.inner.publish(&mut |m: &mut Plan| {
                     fill(m);
                     m.route = bad;

@@ -19,6 +19,7 @@ pub mod wire_layout;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
+use auv_core::capacity::{Class, LARGEST_NODES};
 use auv_core::instance::{Instance, InstanceError};
 use auv_core::oplib::OpError;
 use auv_core::problem::ProblemError;
@@ -231,6 +232,18 @@ pub fn load_benchmark(path: &Path) -> Option<Result<Instance, CliError>> {
                 })
         }),
         _ => return None,
+    })
+}
+
+/// The smallest capacity class that holds `inst` (read from `path`), or a
+/// one-line error (exit 2) when it has more nodes than the largest.
+pub fn capacity_class(inst: &Instance, path: &Path) -> Result<Class, CliError> {
+    Class::for_nodes(inst.nodes.len()).map_err(|e| CliError::Problem {
+        path: path.to_path_buf(),
+        source: ProblemError::TooManyNodes {
+            n: e.0,
+            capacity: LARGEST_NODES,
+        },
     })
 }
 

@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use auv_core::instance::{Instance, Objective};
-use auv_core::oplib::{BestKnown, instance_name};
+use auv_core::oplib::{BestKnown, BestKnownEntry, instance_name};
 use auv_core::problem::Problem;
 use auv_core::rng::PlannerRng;
 use auv_core::route::{Route, RouteEval};
@@ -209,13 +209,106 @@ fn parse_seconds(flag: &str, text: &str) -> Result<Duration, CliError> {
     }
 }
 
+/// What one instance gave: per (deadline, algorithm) the figures, the
+/// solve time and the anytime trace; and the optimum it is compared with.
+type Measured = (
+    Vec<(u64, Algorithm, RouteEval, Duration, Vec<(Duration, RouteEval)>)>,
+    Optimum,
+);
+
+/// Runs every algorithm at every deadline on `inst` (read from `path`) on
+/// the capacity class of `W` words, and finds the optimum to compare with:
+/// the best known entry `known`, else an exact run of `exact_limit`
+/// (recorded in `exact_runs`).
+#[allow(clippy::too_many_arguments)] // one call site, the loop of `run`
+fn measure<const W: usize>(
+    path: &Path,
+    inst: &Instance,
+    known: Option<&BestKnownEntry>,
+    algorithms: &[Algorithm],
+    deadlines: &[u64],
+    (seed, clock, exact_limit): (u64, Clock, Duration),
+    trace: &mut Vec<(Duration, RouteEval)>,
+    exact_runs: &mut Vec<(bool, Duration)>,
+) -> Result<Measured, CliError> {
+    let mut solvers: Vec<_> = algorithms
+        .iter()
+        .map(|&a| (a, a.build::<W>(a.paper_iterations())))
+        .collect();
+    let problem = Problem::<W>::from_instance(inst).map_err(|source| CliError::Problem {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut results = Vec::new();
+    let mut best: Option<(Route<W>, RouteEval)> = None;
+    for &d in deadlines {
+        for (a, s) in &mut solvers {
+            let mut rng = PlannerRng::new(seed);
+            // Auto spends the whole deadline; PSO and BBO
+            // keep the paper's budget, cut by the deadline.
+            let iterations = if *a == Algorithm::Auto {
+                u32::MAX
+            } else {
+                a.paper_iterations()
+            };
+            let t = solve_timed(
+                s.as_mut(),
+                &problem,
+                &mut rng,
+                iterations,
+                Duration::from_millis(d),
+                clock,
+                trace,
+            );
+            let (r, e) = s.best();
+            if e.feasible && best.as_ref().is_none_or(|(_, b)| problem.better(e, b)) {
+                best = Some((*r, *e));
+            }
+            results.push((d, *a, *e, t, trace.clone()));
+        }
+    }
+    let optimum = match known {
+        Some(entry) => Optimum::Known(entry.score),
+        None => {
+            let settings = ExactSettings {
+                time_limit: Some(exact_limit),
+                warm_start: best.map(|b| b.0),
+                // Gaps compare objective values only.
+                break_ties: false,
+                ..ExactSettings::default()
+            };
+            match solve_exact(&problem, &settings) {
+                Ok(out) => {
+                    exact_runs.push((out.proved_optimal, out.elapsed));
+                    let mut value = score(inst, &out.eval);
+                    if let Some((_, e)) = best
+                        && problem.better(&e, &out.eval)
+                    {
+                        value = score(inst, &e);
+                    }
+                    if out.proved_optimal {
+                        Optimum::Proved(value)
+                    } else {
+                        Optimum::Unproved {
+                            best: value,
+                            bound: out.bound,
+                        }
+                    }
+                }
+                Err(_) => Optimum::None,
+            }
+        }
+    };
+    Ok((results, optimum))
+}
+
 /// Runs `solver` within `deadline` on `clock` (the loop of
 /// [`solver::run`], the clock chosen here); returns the solve time on that
 /// clock and, in `trace`, the time of every improvement of the best-so-far
 /// with its figures (the anytime curve).
-fn solve_timed(
-    s: &mut dyn Solver,
-    problem: &Problem,
+fn solve_timed<const W: usize>(
+    s: &mut dyn Solver<W>,
+    problem: &Problem<W>,
     rng: &mut PlannerRng,
     iterations: u32,
     deadline: Duration,
@@ -284,7 +377,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
         )));
     }
     let known = best_known(&args.instances)?;
-    let mut solvers: Vec<_> = algorithms.iter().map(|&a| (a, a.build(a.paper_iterations()))).collect();
     let mut rows = Vec::new();
     let mut trace = Vec::with_capacity(4096);
     let mut exact_runs: Vec<(bool, Duration)> = Vec::new();
@@ -296,70 +388,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .map(|d| d.display().to_string())
             .filter(|d| !d.is_empty())
             .unwrap_or_else(|| ".".to_owned());
-        let problem = Problem::from_instance(&inst).map_err(|source| CliError::Problem {
-            path: path.clone(),
-            source,
-        })?;
-        let mut results = Vec::new();
-        let mut best: Option<(Route, RouteEval)> = None;
-        for &d in &deadlines {
-            for (a, s) in &mut solvers {
-                let mut rng = PlannerRng::new(args.seed);
-                // Auto spends the whole deadline; PSO and BBO
-                // keep the paper's budget, cut by the deadline.
-                let iterations = if *a == Algorithm::Auto {
-                    u32::MAX
-                } else {
-                    a.paper_iterations()
-                };
-                let t = solve_timed(
-                    s.as_mut(),
-                    &problem,
-                    &mut rng,
-                    iterations,
-                    Duration::from_millis(d),
-                    args.clock,
-                    &mut trace,
-                );
-                let (r, e) = s.best();
-                if e.feasible && best.as_ref().is_none_or(|(_, b)| problem.better(e, b)) {
-                    best = Some((*r, *e));
-                }
-                results.push((d, *a, *e, t, trace.clone()));
-            }
-        }
-        let optimum = match known.as_ref().and_then(|k| k.get(&name)) {
-            Some(entry) => Optimum::Known(entry.score),
-            None => {
-                let settings = ExactSettings {
-                    time_limit: Some(exact_limit),
-                    warm_start: best.map(|b| b.0),
-                    // Gaps compare objective values only.
-                    break_ties: false,
-                    ..ExactSettings::default()
-                };
-                match solve_exact(&problem, &settings) {
-                    Ok(out) => {
-                        exact_runs.push((out.proved_optimal, out.elapsed));
-                        let mut value = score(&inst, &out.eval);
-                        if let Some((_, e)) = best
-                            && problem.better(&e, &out.eval)
-                        {
-                            value = score(&inst, &e);
-                        }
-                        if out.proved_optimal {
-                            Optimum::Proved(value)
-                        } else {
-                            Optimum::Unproved {
-                                best: value,
-                                bound: out.bound,
-                            }
-                        }
-                    }
-                    Err(_) => Optimum::None,
-                }
-            }
-        };
+        let class = super::capacity_class(&inst, path)?;
+        let (results, optimum) = auv_core::with_class!(class, W => measure::<W>(
+            path,
+            &inst,
+            known.as_ref().and_then(|k| k.get(&name)),
+            &algorithms,
+            &deadlines,
+            (args.seed, args.clock, exact_limit),
+            &mut trace,
+            &mut exact_runs,
+        ))?;
         for (d, a, e, t, tr) in results {
             let sc = score(&inst, &e);
             let time_to_best = optimum.value().and_then(|o| {

@@ -17,10 +17,15 @@
 //! a fraction; 0 when proved). The format allows extra fields ("at least").
 //! A search stopped by `--time-limit S` reports `stop` = `deadline`; a
 //! finished one `converged`; `iterations` counts search nodes (saturating).
+//!
+//! The solvers run on the smallest capacity class that holds the instance
+//! (64, 128, 256 or 512 nodes, [`auv_core::capacity::Class`]); more nodes
+//! than 512 is a one-line error (exit 2).
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use auv_core::instance::Instance;
 use auv_core::problem::Problem;
 use auv_core::rng::PlannerRng;
 use auv_core::solution::{RunInfo, Solution};
@@ -50,7 +55,7 @@ impl AlgorithmArg {
     /// replaced by `iterations` when given (so PSO's inertia schedule spans
     /// the iterations actually run). Returns the solver and its budget, or
     /// `None` for `exact`, which is not an anytime swarm ([`run_exact`]).
-    pub fn build(self, iterations: Option<u32>, deadline: bool) -> Option<(Box<dyn Solver>, u32)> {
+    pub fn build<const W: usize>(self, iterations: Option<u32>, deadline: bool) -> Option<(Box<dyn Solver<W>>, u32)> {
         let algorithm = match self {
             Self::Exact => return None,
             Self::Auto => Algorithm::Auto,
@@ -131,12 +136,18 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         (None, None) => return Err(CliError::Usage("give --instance FILE or --mission FILE".into())),
     };
-    let problem = Problem::from_instance(&inst).map_err(|source| CliError::Problem {
-        path: path.clone(),
+    let class = super::capacity_class(&inst, &path)?;
+    auv_core::with_class!(class, W => solve_in::<W>(&args, &inst, &path))
+}
+
+/// [`run`] on the capacity class of `W` words.
+fn solve_in<const W: usize>(args: &Args, inst: &Instance, path: &std::path::Path) -> Result<(), CliError> {
+    let problem = Problem::<W>::from_instance(inst).map_err(|source| CliError::Problem {
+        path: path.to_path_buf(),
         source,
     })?;
-    let Some((mut solver, iterations)) = args.algorithm.build(args.iterations, args.deadline_ms.is_some()) else {
-        return run_exact(&args, &path, &inst, &problem);
+    let Some((mut solver, iterations)) = args.algorithm.build::<W>(args.iterations, args.deadline_ms.is_some()) else {
+        return run_exact(args, path, inst, &problem);
     };
     if let Some(t) = &args.time_limit {
         return Err(CliError::Usage(format!(
@@ -158,7 +169,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let cpu_ms = cpu_ms_since(cpu0);
     let route = solver.best().0.to_vec();
     let info = RunInfo::from_outcome(solver.name(), args.seed, &outcome, cpu_ms);
-    let solution = Solution::new(&inst, &route, &info).map_err(|e| {
+    let solution = Solution::new(inst, &route, &info).map_err(|e| {
         CliError::Internal(format!(
             "{} returned {route:?}, which is not a route of the instance: {e}",
             solver.name()
@@ -167,7 +178,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if args.json {
         print(&(solution.to_json() + "\n"))
     } else {
-        print(&solution.summary(&inst))
+        print(&solution.summary(inst))
     }
 }
 
@@ -190,11 +201,11 @@ struct ExactSolution<'a> {
 }
 
 /// `planner solve --algorithm exact`.
-fn run_exact(
+fn run_exact<const W: usize>(
     args: &Args,
     path: &std::path::Path,
-    inst: &auv_core::instance::Instance,
-    problem: &Problem,
+    inst: &Instance,
+    problem: &Problem<W>,
 ) -> Result<(), CliError> {
     // Check every argument before the (possibly long) search.
     let time_limit = args.time_limit.as_deref().map(parse_time_limit).transpose()?;

@@ -39,6 +39,7 @@ use super::Solver;
 use super::ils::{Moves, Ruin};
 use super::local::LocalSearch;
 use super::pso::{Pso, PsoSettings};
+use crate::capacity::DEFAULT_WORDS;
 use crate::problem::{MAX_NODES, NodeSet, Problem};
 use crate::rng::PlannerRng;
 use crate::route::{Route, RouteEval};
@@ -120,21 +121,21 @@ impl Default for AutoSettings {
 pub const AUTO_ITERATIONS: u32 = 300;
 
 /// The memetic planner with every buffer allocated up front.
-pub struct Auto {
+pub struct Auto<const W: usize = DEFAULT_WORDS> {
     settings: AutoSettings,
-    pso: Pso,
-    ls: LocalSearch,
-    moves: Moves,
+    pso: Pso<W>,
+    ls: LocalSearch<W>,
+    moves: Moves<W>,
     /// Current ruin size cap: grows while kicks find nothing, back to its
     /// base on a new best (adaptive removal size).
     ruin_cap: usize,
     /// The swarm's best figures when last polished.
     polished_from: RouteEval,
     /// Iterated local search: current route and figures.
-    cur: Route,
+    cur: Route<W>,
     cur_eval: RouteEval,
-    trial: Route,
-    best: Route,
+    trial: Route<W>,
+    best: Route<W>,
     best_eval: RouteEval,
     stale: u32,
     /// Steps since `start`.
@@ -143,7 +144,7 @@ pub struct Auto {
     restarts: u32,
 }
 
-impl Auto {
+impl<const W: usize> Auto<W> {
     /// Builds the solver (allocates all buffers).
     pub fn new(settings: AutoSettings) -> Self {
         Self {
@@ -176,7 +177,7 @@ impl Auto {
     /// Takes `route` as best-so-far on strict improvement, deep-polished
     /// first (or-opt and swap as well): new bests are rare, so the larger
     /// neighbourhood is affordable there.
-    fn offer(&mut self, p: &Problem, route: &Route, e: RouteEval) -> bool {
+    fn offer(&mut self, p: &Problem<W>, route: &Route<W>, e: RouteEval) -> bool {
         if p.better(&e, &self.best_eval) {
             let (mut r, mut e) = (*route, e);
             let deep = self.settings.deep_polish_max_n >= p.n();
@@ -198,7 +199,7 @@ impl Auto {
 
     /// Rebuilds `trial` after a ruin: shorten, refill (the removed nodes
     /// barred first, so the route changes), shorten, refill, polish.
-    fn recreate(&mut self, p: &Problem, e: &mut RouteEval, barred: NodeSet, rng: &mut PlannerRng) {
+    fn recreate(&mut self, p: &Problem<W>, e: &mut RouteEval, barred: NodeSet<W>, rng: &mut PlannerRng) {
         let (noise, seg) = (self.settings.noise, self.settings.or_opt_segment);
         self.moves.shorten(p, &mut self.trial, e, SHORTEN_ROUNDS, seg);
         self.moves.fill(p, &mut self.trial, e, barred, noise, rng);
@@ -210,7 +211,7 @@ impl Auto {
     }
 
     /// One ruin-and-recreate kick of the iterated local search.
-    fn kick(&mut self, p: &Problem, rng: &mut PlannerRng) {
+    fn kick(&mut self, p: &Problem<W>, rng: &mut PlannerRng) {
         let len = self.cur.len();
         self.trial = self.cur;
         let mut e = self.cur_eval;
@@ -268,7 +269,7 @@ impl Auto {
 
     /// The constructive start: greedy insertion by value per second from
     /// the bare start → goal leg, shortened and refilled, polished.
-    fn construct(&mut self, p: &Problem, rng: &mut PlannerRng) {
+    fn construct(&mut self, p: &Problem<W>, rng: &mut PlannerRng) {
         let (Some(r), true) = (
             Route::from_slice(&[p.start(), p.goal()]),
             p.has_edge(p.start(), p.goal()),
@@ -291,18 +292,18 @@ impl Auto {
 /// work; a route that needs more keeps shortening in the next kick).
 const SHORTEN_ROUNDS: u32 = 8;
 
-impl Default for Auto {
+impl<const W: usize> Default for Auto<W> {
     fn default() -> Self {
         Self::new(AutoSettings::default())
     }
 }
 
-impl Solver for Auto {
+impl<const W: usize> Solver<W> for Auto<W> {
     fn name(&self) -> &'static str {
         "auto"
     }
 
-    fn start(&mut self, problem: &Problem, rng: &mut PlannerRng, warm: Option<&Route>) {
+    fn start(&mut self, problem: &Problem<W>, rng: &mut PlannerRng, warm: Option<&Route<W>>) {
         // No polishing here: `start` stays as cheap as the swarm's start.
         self.pso.start(problem, rng, warm);
         let (r, e) = self.pso.best();
@@ -318,7 +319,7 @@ impl Solver for Auto {
         self.ruin_cap = self.settings.ruin_min;
     }
 
-    fn step(&mut self, problem: &Problem, rng: &mut PlannerRng) -> bool {
+    fn step(&mut self, problem: &Problem<W>, rng: &mut PlannerRng) -> bool {
         self.steps += 1;
         // The constructive start runs in the first step, so `start` stays as
         // cheap as the swarm's.
@@ -345,15 +346,15 @@ impl Solver for Auto {
         true
     }
 
-    fn best(&self) -> (&Route, &RouteEval) {
+    fn best(&self) -> (&Route<W>, &RouteEval) {
         (&self.best, &self.best_eval)
     }
 }
 
-impl Auto {
+impl<const W: usize> Auto<W> {
     /// One generation of the swarm; its best, when it improved, is
     /// polished, offered and written back.
-    fn swarm_step(&mut self, problem: &Problem, rng: &mut PlannerRng) {
+    fn swarm_step(&mut self, problem: &Problem<W>, rng: &mut PlannerRng) {
         self.pso.step(problem, rng);
         let (r, e) = self.pso.best();
         let (r, e) = (*r, *e);
@@ -376,10 +377,16 @@ impl Auto {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::decode::Decoder;
+
     use crate::fixtures::random_instance;
     use crate::solver::pso::warm_vector;
     use crate::solver::{Budget, run};
+
+    // The default capacity class unless a test names another.
+    type Problem = crate::problem::Problem;
+    type Route = crate::route::Route;
+    type Decoder = crate::decode::Decoder;
+    type Auto = crate::solver::auto::Auto;
 
     #[test]
     fn polished_routes_decode_back_to_themselves() {

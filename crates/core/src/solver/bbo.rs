@@ -42,8 +42,9 @@ use core::cmp::Ordering;
 use super::Solver;
 use super::lanes::LaneRng;
 use super::pso::{P_MAX, P_MIN, unit24, warm_count, warm_vector};
+use crate::capacity::{DEFAULT_WORDS, PerNode, nodes_of};
 use crate::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN, padded_len};
-use crate::problem::{MAX_NODES, Problem};
+use crate::problem::Problem;
 use crate::rng::PlannerRng;
 use crate::route::{Route, RouteEval};
 
@@ -76,10 +77,10 @@ impl BboSettings {
 const WARM_NOISE_FRACTION: f64 = 0.1;
 
 /// A BBO solver with every buffer allocated up front.
-pub struct Bbo {
+pub struct Bbo<const W: usize = DEFAULT_WORDS> {
     settings: BboSettings,
     /// Decodes the changed habitats as one stream.
-    decoder: Decoder,
+    decoder: Decoder<W>,
     lanes: LaneRng,
     n: usize,
     stride: usize,
@@ -102,11 +103,11 @@ pub struct Bbo {
     mutate_below: Vec<u32>,
     /// Random words for the habitat being changed (two per dimension).
     words: Vec<u64>,
-    best: Route,
+    best: Route<W>,
     best_eval: RouteEval,
 }
 
-impl Bbo {
+impl<const W: usize> Bbo<W> {
     /// Builds the solver (allocates all buffers). At least 2 habitats are
     /// kept and at most `habitats − 1` elites, so something always evolves.
     pub fn new(settings: BboSettings) -> Self {
@@ -124,7 +125,7 @@ impl Bbo {
             .into_iter()
             .map(threshold16)
             .collect();
-        let cells = habitats * MAX_NODES;
+        let cells = habitats * nodes_of(W);
         Self {
             settings,
             decoder: Decoder::new(),
@@ -140,7 +141,7 @@ impl Bbo {
             alias_other,
             immigrate_below,
             mutate_below,
-            words: vec![0; 2 * MAX_NODES],
+            words: vec![0; 2 * nodes_of(W)],
             best: Route::new(),
             best_eval: RouteEval::default(),
         }
@@ -154,7 +155,7 @@ impl Bbo {
     /// Decodes habitats `order[from..]` (`ranked`) or all habitats (not
     /// `ranked`) as one stream, records their figures, and updates the
     /// best-so-far on strict improvement as each walk finishes.
-    fn evaluate(&mut self, problem: &Problem, ranked: bool, from: usize) {
+    fn evaluate(&mut self, problem: &Problem<W>, ranked: bool, from: usize) {
         let stride = self.stride;
         let habitat = |i: usize| if ranked { self.order[from + i] } else { i };
         let count = if ranked {
@@ -247,12 +248,12 @@ fn species_mutation_rates(habitats: usize, max_rate: f64) -> Vec<f64> {
     (0..n).map(|r| max_rate * (1.0 - rel[n - r])).collect()
 }
 
-impl Solver for Bbo {
+impl<const W: usize> Solver<W> for Bbo<W> {
     fn name(&self) -> &'static str {
         "bbo"
     }
 
-    fn start(&mut self, problem: &Problem, rng: &mut PlannerRng, warm: Option<&Route>) {
+    fn start(&mut self, problem: &Problem<W>, rng: &mut PlannerRng, warm: Option<&Route<W>>) {
         let n = problem.n();
         let stride = padded_len(n);
         self.n = n;
@@ -265,7 +266,7 @@ impl Solver for Bbo {
         }
         let mut warm_eval = None;
         if let Some(route) = warm {
-            let mut exact = [0.0f64; MAX_NODES];
+            let mut exact = PerNode::<f64, W>::splat(0.0);
             warm_vector(route, n, &mut exact);
             for (x, e) in self.pop[..n].iter_mut().zip(&exact) {
                 *x = *e as f32;
@@ -298,7 +299,7 @@ impl Solver for Bbo {
         self.rank();
     }
 
-    fn step(&mut self, problem: &Problem, _rng: &mut PlannerRng) -> bool {
+    fn step(&mut self, problem: &Problem<W>, _rng: &mut PlannerRng) -> bool {
         let (n, stride) = (self.n, self.stride);
         let habitats = self.settings.habitats;
         self.old[..habitats * stride].copy_from_slice(&self.pop[..habitats * stride]);
@@ -343,7 +344,7 @@ impl Solver for Bbo {
         true
     }
 
-    fn best(&self) -> (&Route, &RouteEval) {
+    fn best(&self) -> (&Route<W>, &RouteEval) {
         (&self.best, &self.best_eval)
     }
 }
@@ -351,6 +352,10 @@ impl Solver for Bbo {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    // The default capacity class unless a test names another.
+    type Problem = crate::problem::Problem;
+    type Bbo = crate::solver::bbo::Bbo;
 
     #[test]
     fn rates_follow_rank_and_the_roulette_follows_mu() {

@@ -1,5 +1,5 @@
 //! The fast moves of `auto`'s ruin-and-recreate search, for routes of up to
-//! [`MAX_NODES`] nodes on complete or sparse, metric or non-metric networks.
+//! a capacity class's nodes on complete or sparse, metric or non-metric networks.
 //!
 //! - [`Moves::shorten`]: 2-opt (segment reversal) and or-opt (move a segment
 //!   of 1–3 nodes, either way round), first improvement, until no move
@@ -20,27 +20,28 @@
 //! from the caller's generator; nothing assumes the triangle inequality.
 
 use super::objective::Value;
-use crate::problem::{MAX_NODES, NodeSet, Problem};
+use crate::capacity::{DEFAULT_WORDS, PerNode};
+use crate::problem::{NodeSet, Problem};
 use crate::rng::PlannerRng;
 use crate::route::{Route, RouteEval};
 
 /// Scratch of the moves (no heap).
-pub struct Moves {
+pub struct Moves<const W: usize = DEFAULT_WORDS> {
     /// The objective's value of route changes.
     value: Value,
     /// Route position of each node on the route.
-    pos: [u8; MAX_NODES],
+    pos: PerNode<u16, W>,
     /// Best insertion ratio of each free node (−∞: none fits).
-    ratio: [f64; MAX_NODES],
+    ratio: PerNode<f64, W>,
     /// The route node after which that best insertion goes.
-    after: [u8; MAX_NODES],
+    after: PerNode<u16, W>,
     /// Its time change.
-    dt: [f64; MAX_NODES],
+    dt: PerNode<f64, W>,
     /// Per-fill noise factor of each node.
-    noise: [f64; MAX_NODES],
+    noise: PerNode<f64, W>,
 }
 
-impl Default for Moves {
+impl<const W: usize> Default for Moves<W> {
     fn default() -> Self {
         Self::new()
     }
@@ -60,21 +61,21 @@ pub enum Ruin {
     Cluster,
 }
 
-impl Moves {
+impl<const W: usize> Moves<W> {
     /// Scratch ready for use.
     pub fn new() -> Self {
         Self {
             value: Value::new(crate::instance::Objective::MaxWeight),
-            pos: [0; MAX_NODES],
-            ratio: [f64::NEG_INFINITY; MAX_NODES],
-            after: [0; MAX_NODES],
-            dt: [0.0; MAX_NODES],
-            noise: [1.0; MAX_NODES],
+            pos: PerNode::splat(0),
+            ratio: PerNode::splat(f64::NEG_INFINITY),
+            after: PerNode::splat(0),
+            dt: PerNode::splat(0.0),
+            noise: PerNode::splat(1.0),
         }
     }
 
     /// Sets the objective the moves value changes by (call once per problem).
-    pub fn set_objective(&mut self, p: &Problem) {
+    pub fn set_objective(&mut self, p: &Problem<W>) {
         self.value = Value::of(p);
     }
 
@@ -84,8 +85,8 @@ impl Moves {
     /// whether the route changed.
     pub fn shorten(
         &mut self,
-        p: &Problem,
-        route: &mut Route,
+        p: &Problem<W>,
+        route: &mut Route<W>,
         e: &mut RouteEval,
         max_rounds: u32,
         max_segment: usize,
@@ -133,9 +134,9 @@ impl Moves {
 
     /// The first improving or-opt move found, applied.
     fn or_opt(
-        p: &Problem,
+        p: &Problem<W>,
         v: &Value,
-        route: &mut Route,
+        route: &mut Route<W>,
         max_segment: usize,
         accept: &impl Fn(f64, f64) -> bool,
     ) -> bool {
@@ -184,22 +185,22 @@ impl Moves {
     /// the time change), given `time_s` of route time and `limit`.
     #[inline]
     fn best_place(
-        p: &Problem,
+        p: &Problem<W>,
         v: &Value,
-        route: &Route,
+        route: &Route<W>,
         u: usize,
         noise: f64,
         time_s: f64,
         limit: f64,
-    ) -> (f64, u8, f64) {
+    ) -> (f64, u16, f64) {
         let nu = p.neighbours(u);
-        let mut best = (f64::NEG_INFINITY, 0u8, 0.0);
+        let mut best = (f64::NEG_INFINITY, 0u16, 0.0);
         for k in 0..route.len() - 1 {
             let (a, b) = (route.get(k), route.get(k + 1));
             if let Some((r, dt)) = Self::insertion(p, v, nu, u, (a, b), noise, time_s, limit)
                 && r > best.0
             {
-                best = (r, a as u8, dt);
+                best = (r, a as u16, dt);
             }
         }
         best
@@ -211,9 +212,9 @@ impl Moves {
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn insertion(
-        p: &Problem,
+        p: &Problem<W>,
         v: &Value,
-        nu: NodeSet,
+        nu: NodeSet<W>,
         u: usize,
         (a, b): (usize, usize),
         noise: f64,
@@ -244,10 +245,10 @@ impl Moves {
     /// nodes inserted.
     pub fn fill(
         &mut self,
-        p: &Problem,
-        route: &mut Route,
+        p: &Problem<W>,
+        route: &mut Route<W>,
         e: &mut RouteEval,
-        barred: NodeSet,
+        barred: NodeSet<W>,
         noise: f64,
         rng: &mut PlannerRng,
     ) -> u32 {
@@ -262,14 +263,9 @@ impl Moves {
         let mut on_route = NodeSet::EMPTY;
         for (k, u) in route.iter().enumerate() {
             on_route.insert(u);
-            self.pos[u] = k as u8;
+            self.pos[u] = k as u16;
         }
-        let all = if p.n() >= MAX_NODES {
-            u128::MAX
-        } else {
-            (1u128 << p.n()) - 1
-        };
-        let mut free = NodeSet(all & !on_route.0 & !p.excluded().0 & !barred.0);
+        let mut free = NodeSet::first(p.n()) - on_route - p.excluded() - barred;
         let mut time_s = e.time_s;
         for u in free.iter() {
             self.noise[u] = if noise > 0.0 { 1.0 + noise * rng.next_f64() } else { 1.0 };
@@ -296,7 +292,7 @@ impl Moves {
             free.remove(pick);
             inserted += 1;
             for (j, u) in route.iter().enumerate().skip(k + 1) {
-                self.pos[u] = j as u8;
+                self.pos[u] = j as u16;
             }
             // Update the other free nodes: a node whose best place was the
             // edge a–b just split, or which no longer fits there, is placed
@@ -314,7 +310,7 @@ impl Moves {
                     if let Some((r, dt)) = Self::insertion(p, v, nu, u, (x, y), self.noise[u], time_s, limit)
                         && r > self.ratio[u]
                     {
-                        (self.ratio[u], self.after[u], self.dt[u]) = (r, x as u8, dt);
+                        (self.ratio[u], self.after[u], self.dt[u]) = (r, x as u16, dt);
                     }
                 }
             }
@@ -333,13 +329,13 @@ impl Moves {
     /// `e` is re-evaluated exactly.
     pub fn ruin(
         &mut self,
-        p: &Problem,
-        route: &mut Route,
+        p: &Problem<W>,
+        route: &mut Route<W>,
         e: &mut RouteEval,
         shape: Ruin,
         size: usize,
         rng: &mut PlannerRng,
-    ) -> NodeSet {
+    ) -> NodeSet<W> {
         let mut removed = NodeSet::EMPTY;
         let interior = route.len().saturating_sub(2);
         if interior == 0 || size == 0 {
@@ -355,7 +351,7 @@ impl Moves {
             f64::INFINITY
         };
         let mut time_s = e.time_s;
-        let remove_at = |route: &mut Route, i: usize, removed: &mut NodeSet, time_s: &mut f64| -> bool {
+        let remove_at = |route: &mut Route<W>, i: usize, removed: &mut NodeSet<W>, time_s: &mut f64| -> bool {
             let (a, u, b) = (route.get(i - 1), route.get(i), route.get(i + 1));
             if !p.has_edge(a, b) {
                 return false;
@@ -393,7 +389,7 @@ impl Moves {
             }
             Ruin::Cluster => {
                 let c = route.get(1 + rng.below(interior as u32) as usize);
-                let mut tried = NodeSet::EMPTY;
+                let mut tried = NodeSet::<W>::EMPTY;
                 for _ in 0..size {
                     // The nearest remaining interior node to c (c first).
                     let mut best = (f64::INFINITY, 0usize);
@@ -426,6 +422,12 @@ mod tests {
     use super::*;
     use crate::fixtures::random_instance;
     use crate::instance::Objective;
+
+    // The default capacity class unless a test names another.
+    type Problem = crate::problem::Problem;
+    type NodeSet = crate::problem::NodeSet;
+    type Route = crate::route::Route;
+    type Moves = crate::solver::ils::Moves;
 
     fn problems() -> Vec<Problem> {
         let mut out = Vec::new();

@@ -29,15 +29,16 @@
 //! bounded: one pass is O(len · n) for insert/replace, O(len · deg²) for pair
 //! insertion and O(len²) for 2-opt, or-opt and swap.
 
-use crate::problem::{MAX_NODES, NodeSet, Problem};
+use crate::capacity::DEFAULT_WORDS;
+use crate::problem::{NodeSet, Problem};
 use crate::route::{Route, RouteEval};
 
 /// Reusable scratch for local search (no heap).
-pub struct LocalSearch {
-    scratch: Route,
+pub struct LocalSearch<const W: usize = DEFAULT_WORDS> {
+    scratch: Route<W>,
 }
 
-impl Default for LocalSearch {
+impl<const W: usize> Default for LocalSearch<W> {
     fn default() -> Self {
         Self::new()
     }
@@ -67,7 +68,7 @@ enum Move {
 /// for or-opt — longer segments rarely fit elsewhere on these budgets).
 const MAX_SEGMENT: usize = 3;
 
-impl LocalSearch {
+impl<const W: usize> LocalSearch<W> {
     /// Scratch ready for use.
     pub const fn new() -> Self {
         Self { scratch: Route::new() }
@@ -75,21 +76,27 @@ impl LocalSearch {
 
     /// Improves `route` (whose figures are `eval`) in place; returns whether
     /// anything changed. At most `max_passes` best-improvement passes.
-    pub fn improve(&mut self, p: &Problem, route: &mut Route, eval: &mut RouteEval, max_passes: u32) -> bool {
+    pub fn improve(&mut self, p: &Problem<W>, route: &mut Route<W>, eval: &mut RouteEval, max_passes: u32) -> bool {
         self.improve_with(p, route, eval, max_passes, false)
     }
 
     /// [`LocalSearch::improve`] with or-opt, swap and pair insertion as
     /// well: a larger neighbourhood, each pass several times as costly
     /// (worth it on new best routes, not on every kick).
-    pub fn improve_deep(&mut self, p: &Problem, route: &mut Route, eval: &mut RouteEval, max_passes: u32) -> bool {
+    pub fn improve_deep(
+        &mut self,
+        p: &Problem<W>,
+        route: &mut Route<W>,
+        eval: &mut RouteEval,
+        max_passes: u32,
+    ) -> bool {
         self.improve_with(p, route, eval, max_passes, true)
     }
 
     fn improve_with(
         &mut self,
-        p: &Problem,
-        route: &mut Route,
+        p: &Problem<W>,
+        route: &mut Route<W>,
         eval: &mut RouteEval,
         max_passes: u32,
         deep: bool,
@@ -115,7 +122,7 @@ impl LocalSearch {
     }
 
     /// Scans every move and returns the best strictly improving one.
-    fn best_move(&mut self, p: &Problem, route: &Route, eval: &RouteEval, deep: bool) -> Option<Move> {
+    fn best_move(&mut self, p: &Problem<W>, route: &Route<W>, eval: &RouteEval, deep: bool) -> Option<Move> {
         let n = p.n();
         let len = route.len();
         let limit = p.budget_limit_s();
@@ -123,7 +130,7 @@ impl LocalSearch {
         for u in route.iter() {
             on_route.insert(u);
         }
-        let free = NodeSet(all_nodes(n) & !on_route.0 & !p.excluded().0);
+        let free = NodeSet::first(n) - on_route - p.excluded();
         let mut best: Option<(Move, RouteEval)> = None;
         let mut consider = |mv: Move, e: RouteEval| {
             let incumbent = best.as_ref().map_or(eval, |(_, b)| b);
@@ -151,7 +158,7 @@ impl LocalSearch {
             let (a, b) = (route.get(i), route.get(i + 1));
             let (t_ab, d_ab, w_ab, r_ab) = (p.time_s(a, b), p.distance_m(a, b), p.gain(a, b), p.risk_ratio(a, b));
             // Insert v between a and b: candidates are common neighbours.
-            let common = NodeSet(p.neighbours(a).0 & p.neighbours(b).0 & free.0);
+            let common = p.neighbours(a) & p.neighbours(b) & free;
             for v in common.iter() {
                 let dt = p.time_s(a, v) + p.time_s(v, b) - t_ab;
                 if !fits(dt) {
@@ -169,13 +176,13 @@ impl LocalSearch {
             }
             // Insert v, w between a and b (deep only): reaches detours a
             // single insertion cannot on sparse (coastal) networks.
-            let pair_free = if deep { free.0 } else { 0 };
-            for v in NodeSet(p.neighbours(a).0 & pair_free).iter() {
+            let pair_free = if deep { free } else { NodeSet::EMPTY };
+            for v in (p.neighbours(a) & pair_free).iter() {
                 let (t_av, d_av, w_av, r_av) = (p.time_s(a, v), p.distance_m(a, v), p.gain(a, v), p.risk_ratio(a, v));
                 if eval.feasible && eval.time_s + t_av - t_ab > limit {
                     continue;
                 }
-                let mut ws = NodeSet(p.neighbours(v).0 & p.neighbours(b).0 & free.0);
+                let mut ws = p.neighbours(v) & p.neighbours(b) & free;
                 ws.remove(v);
                 for w in ws.iter() {
                     let dt = t_av + p.time_s(v, w) + p.time_s(w, b) - t_ab;
@@ -202,7 +209,7 @@ impl LocalSearch {
             let out_w = p.gain(a, u) + p.gain(u, b);
             let out_r = p.risk_ratio(a, u) + p.risk_ratio(u, b);
             // Replace u by v.
-            let common = NodeSet(p.neighbours(a).0 & p.neighbours(b).0 & free.0);
+            let common = p.neighbours(a) & p.neighbours(b) & free;
             for v in common.iter() {
                 let dt = p.time_s(a, v) + p.time_s(v, b) - out_t;
                 if !fits(dt) {
@@ -344,16 +351,11 @@ impl LocalSearch {
 /// Weight of edge a–b without the far node's prize (prizes of the nodes on a
 /// route do not depend on the direction of travel).
 #[inline]
-fn edge_weight(p: &Problem, a: usize, b: usize) -> f64 {
+fn edge_weight<const W: usize>(p: &Problem<W>, a: usize, b: usize) -> f64 {
     p.gain(a, b) - p.prize(b)
 }
 
-#[inline]
-fn all_nodes(n: usize) -> u128 {
-    if n >= MAX_NODES { u128::MAX } else { (1u128 << n) - 1 }
-}
-
-fn apply(route: &Route, scratch: &mut Route, mv: Move) {
+fn apply<const W: usize>(route: &Route<W>, scratch: &mut Route<W>, mv: Move) {
     scratch.clear();
     match mv {
         Move::Insert { i, v } => {
@@ -420,10 +422,16 @@ fn apply(route: &Route, scratch: &mut Route, mv: Move) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::decode::Decoder;
+
     use crate::fixtures::{line_instance, random_instance};
     use crate::instance::Objective;
     use crate::rng::PlannerRng;
+
+    // The default capacity class unless a test names another.
+    type Problem = crate::problem::Problem;
+    type Route = crate::route::Route;
+    type Decoder = crate::decode::Decoder;
+    type LocalSearch = crate::solver::local::LocalSearch;
 
     #[test]
     fn inserts_the_profitable_detour() {

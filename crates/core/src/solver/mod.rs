@@ -33,6 +33,7 @@ use auto::{AUTO_ITERATIONS, Auto, AutoSettings};
 use bbo::{Bbo, BboSettings};
 use pso::{Pso, PsoSettings};
 
+use crate::capacity::DEFAULT_WORDS;
 use crate::problem::Problem;
 use crate::rng::PlannerRng;
 use crate::route::{Route, RouteEval};
@@ -90,36 +91,36 @@ pub struct SolveOutcome {
 }
 
 /// An anytime route solver.
-pub trait Solver {
+pub trait Solver<const W: usize = DEFAULT_WORDS> {
     /// Short lower-case name (`pso`, `bbo`, …).
     fn name(&self) -> &'static str;
 
     /// Resets for `problem` and builds the initial population; afterwards
     /// [`Solver::best`] is a valid route. `warm` (a route of this problem)
     /// seeds part of the population when given. Must not allocate.
-    fn start(&mut self, problem: &Problem, rng: &mut PlannerRng, warm: Option<&Route>);
+    fn start(&mut self, problem: &Problem<W>, rng: &mut PlannerRng, warm: Option<&Route<W>>);
 
     /// One generation. Returns `false` when the solver has converged and
     /// further steps cannot change the result. Must not allocate.
-    fn step(&mut self, problem: &Problem, rng: &mut PlannerRng) -> bool;
+    fn step(&mut self, problem: &Problem<W>, rng: &mut PlannerRng) -> bool;
 
     /// The best route so far and its figures.
-    fn best(&self) -> (&Route, &RouteEval);
+    fn best(&self) -> (&Route<W>, &RouteEval);
 }
 
 /// A boxed solver is a solver (so `Algorithm::build`'s boxes go wherever a
 /// `S: Solver` does, e.g. the generic conformance suite).
-impl<S: Solver + ?Sized> Solver for Box<S> {
+impl<const W: usize, S: Solver<W> + ?Sized> Solver<W> for Box<S> {
     fn name(&self) -> &'static str {
         (**self).name()
     }
-    fn start(&mut self, problem: &Problem, rng: &mut PlannerRng, warm: Option<&Route>) {
+    fn start(&mut self, problem: &Problem<W>, rng: &mut PlannerRng, warm: Option<&Route<W>>) {
         (**self).start(problem, rng, warm)
     }
-    fn step(&mut self, problem: &Problem, rng: &mut PlannerRng) -> bool {
+    fn step(&mut self, problem: &Problem<W>, rng: &mut PlannerRng) -> bool {
         (**self).step(problem, rng)
     }
-    fn best(&self) -> (&Route, &RouteEval) {
+    fn best(&self) -> (&Route<W>, &RouteEval) {
         (**self).best()
     }
 }
@@ -178,7 +179,7 @@ impl Algorithm {
     /// A solver with the paper's settings and a budget of `iterations`
     /// (which also sets the PSO's inertia schedule). Allocates every buffer
     /// now; drive it with [`run`] and `Budget::iterations(iterations)`.
-    pub fn build(self, iterations: u32) -> Box<dyn Solver + Send> {
+    pub fn build<const W: usize>(self, iterations: u32) -> Box<dyn Solver<W> + Send> {
         match self {
             Self::Pso => Box::new(Pso::new(PsoSettings {
                 iterations,
@@ -212,11 +213,11 @@ impl core::str::FromStr for Algorithm {
 }
 
 /// Runs `solver` on `problem` within `budget`.
-pub fn run<S: Solver + ?Sized>(
+pub fn run<const W: usize, S: Solver<W> + ?Sized>(
     solver: &mut S,
-    problem: &Problem,
+    problem: &Problem<W>,
     rng: &mut PlannerRng,
-    warm: Option<&Route>,
+    warm: Option<&Route<W>>,
     budget: Budget,
 ) -> SolveOutcome {
     let t0 = Instant::now();
@@ -249,7 +250,7 @@ mod tests {
     fn algorithms_round_trip_their_names() {
         for a in Algorithm::ALL {
             assert_eq!(a.as_str().parse::<Algorithm>(), Ok(a));
-            assert_eq!(a.build(7).name(), a.as_str());
+            assert_eq!(a.build::<2>(7).name(), a.as_str());
         }
         assert_eq!(Algorithm::Pso.paper_iterations(), 150);
         assert_eq!(Algorithm::Bbo.paper_iterations(), 150);

@@ -25,7 +25,7 @@ pub struct Value {
 
 impl Value {
     /// The value of `problem`'s objective.
-    pub fn of(problem: &Problem) -> Self {
+    pub fn of<const W: usize>(problem: &Problem<W>) -> Self {
         Self::new(problem.objective())
     }
 

@@ -61,8 +61,9 @@
 
 use super::Solver;
 use super::lanes::{LANES, LaneRng};
+use crate::capacity::{DEFAULT_WORDS, PerNode, nodes_of};
 use crate::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN, padded_len};
-use crate::problem::{MAX_NODES, Problem};
+use crate::problem::Problem;
 use crate::rng::PlannerRng;
 use crate::route::{Route, RouteEval};
 
@@ -137,10 +138,11 @@ pub(crate) fn warm_count(population: usize) -> usize {
 
 /// Writes into `out[..n]` a priority vector that decodes to `warm` on any
 /// problem where `warm` is a feasible route: priorities fall from
-/// [`PRIORITY_MAX`] along the route (steps of at least 300/129 ≈ 2.3, so
-/// they stay distinct and ordered in `f32` too), every other node sits at
+/// [`PRIORITY_MAX`] along the route (steps of at least 300/129 ≈ 2.3 in
+/// the 128-node class, 300/513 ≈ 0.58 in the 512 one: far above the
+/// decoder's key precision, so they stay distinct and ordered), every other node sits at
 /// [`PRIORITY_MIN`]. Ids ≥ n are skipped.
-pub(crate) fn warm_vector(warm: &Route, n: usize, out: &mut [f64]) {
+pub(crate) fn warm_vector<const W: usize>(warm: &Route<W>, n: usize, out: &mut [f64]) {
     out[..n].fill(PRIORITY_MIN);
     let step = (PRIORITY_MAX - PRIORITY_MIN) / (warm.len() as f64 + 1.0);
     for (k, node) in warm.iter().enumerate() {
@@ -157,16 +159,16 @@ pub(crate) fn unit24(u: u64) -> f32 {
 }
 
 /// A PSO solver with every buffer allocated up front.
-pub struct Pso {
+pub struct Pso<const W: usize = DEFAULT_WORDS> {
     settings: PsoSettings,
     /// Decodes the swarm as one stream.
-    decoder: Decoder,
+    decoder: Decoder<W>,
     lanes: LaneRng,
     /// Node count of the current problem and its padded row length.
     n: usize,
     stride: usize,
     /// Positions, velocities and personal bests: `particles` rows of
-    /// `stride` values each (capacity `MAX_NODES` per row).
+    /// `stride` values each (the class's capacity per row).
     x: Vec<f32>,
     v: Vec<f32>,
     pbest: Vec<f32>,
@@ -175,7 +177,7 @@ pub struct Pso {
     gbest: Vec<f32>,
     /// Random words for the row being updated (one per dimension).
     bits: Vec<u64>,
-    best: Route,
+    best: Route<W>,
     best_eval: RouteEval,
     /// Particle whose personal best is `best` (its position is `gbest`).
     best_particle: usize,
@@ -183,7 +185,7 @@ pub struct Pso {
     iteration: u32,
 }
 
-impl Pso {
+impl<const W: usize> Pso<W> {
     /// Builds the solver (allocates all buffers). A swarm of 0 particles is
     /// taken as 1.
     pub fn new(settings: PsoSettings) -> Self {
@@ -191,7 +193,7 @@ impl Pso {
             particles: settings.particles.max(1),
             ..settings
         };
-        let cells = settings.particles * MAX_NODES;
+        let cells = settings.particles * nodes_of(W);
         Self {
             settings,
             decoder: Decoder::new(),
@@ -202,8 +204,8 @@ impl Pso {
             v: vec![0.0; cells],
             pbest: vec![0.0; cells],
             pbest_eval: vec![RouteEval::default(); settings.particles],
-            gbest: vec![0.0; MAX_NODES],
-            bits: vec![0; MAX_NODES],
+            gbest: vec![0.0; nodes_of(W)],
+            bits: vec![0; nodes_of(W)],
             best: Route::new(),
             best_eval: RouteEval::default(),
             best_particle: 0,
@@ -237,8 +239,8 @@ impl Pso {
     /// (figures `e`) the position and personal best of the swarm's best
     /// particle and the swarm's best, encoded by [`warm_vector`] so the
     /// particle decodes back to it. Never called by the paper-faithful PSO.
-    pub(crate) fn adopt(&mut self, route: &Route, e: RouteEval) {
-        let mut v = [0.0f64; MAX_NODES];
+    pub(crate) fn adopt(&mut self, route: &Route<W>, e: RouteEval) {
+        let mut v = PerNode::<f64, W>::splat(0.0);
         warm_vector(route, self.n, &mut v);
         let row = self.best_particle * self.stride..self.best_particle * self.stride + self.n;
         for ((x, b), src) in self.x[row.clone()].iter_mut().zip(&mut self.pbest[row]).zip(&v) {
@@ -256,7 +258,7 @@ impl Pso {
     /// best and the best-so-far, each on strict improvement. `true` when the
     /// best-so-far improved. (The order walks finish in is a function of the
     /// positions alone, so this stays a function of the seed.)
-    fn evaluate_all(&mut self, problem: &Problem) -> bool {
+    fn evaluate_all(&mut self, problem: &Problem<W>) -> bool {
         let stride = self.stride;
         let x = &self.x;
         let (pbest, pbest_eval) = (&mut self.pbest, &mut self.pbest_eval);
@@ -330,7 +332,7 @@ fn update_row(x: &mut [f32], v: &mut [f32], pbest: &[f32], gbest: &[f32], bits: 
 /// The swarm update compiled per SIMD level; every copy performs the same
 /// IEEE operations in the same order (no fused multiply-add), so results
 /// are identical.
-fn update_swarm(pso: &mut Pso, w: f32) {
+fn update_swarm<const W: usize>(pso: &mut Pso<W>, w: f32) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
@@ -347,18 +349,18 @@ fn update_swarm(pso: &mut Pso, w: f32) {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-fn update_swarm_avx512(pso: &mut Pso, w: f32) {
+fn update_swarm_avx512<const W: usize>(pso: &mut Pso<W>, w: f32) {
     update_swarm_generic(pso, w)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn update_swarm_avx2(pso: &mut Pso, w: f32) {
+fn update_swarm_avx2<const W: usize>(pso: &mut Pso<W>, w: f32) {
     update_swarm_generic(pso, w)
 }
 
 #[inline(always)]
-fn update_swarm_generic(pso: &mut Pso, w: f32) {
+fn update_swarm_generic<const W: usize>(pso: &mut Pso<W>, w: f32) {
     let stride = pso.stride;
     let (lo, hi) = match pso.settings.walls {
         Walls::Absorb | Walls::Clamp => (P_MIN, P_MAX),
@@ -391,12 +393,12 @@ fn update_swarm_generic(pso: &mut Pso, w: f32) {
     }
 }
 
-impl Solver for Pso {
+impl<const W: usize> Solver<W> for Pso<W> {
     fn name(&self) -> &'static str {
         "pso"
     }
 
-    fn start(&mut self, problem: &Problem, rng: &mut PlannerRng, warm: Option<&Route>) {
+    fn start(&mut self, problem: &Problem<W>, rng: &mut PlannerRng, warm: Option<&Route<W>>) {
         let n = problem.n();
         let stride = padded_len(n);
         self.n = n;
@@ -419,7 +421,7 @@ impl Solver for Pso {
         if let Some(route) = warm {
             let seeded = warm_count(particles);
             // Particle 0 exactly on the warm vector; the others near it.
-            let mut exact = [0.0f64; MAX_NODES];
+            let mut exact = PerNode::<f64, W>::splat(0.0);
             warm_vector(route, n, &mut exact);
             for (x, e) in self.x[..n].iter_mut().zip(&exact) {
                 *x = *e as f32;
@@ -455,7 +457,7 @@ impl Solver for Pso {
         self.refresh_gbest();
     }
 
-    fn step(&mut self, problem: &Problem, _rng: &mut PlannerRng) -> bool {
+    fn step(&mut self, problem: &Problem<W>, _rng: &mut PlannerRng) -> bool {
         let w = self.inertia(self.iteration) as f32;
         update_swarm(self, w);
         if self.evaluate_all(problem) {
@@ -465,7 +467,7 @@ impl Solver for Pso {
         true
     }
 
-    fn best(&self) -> (&Route, &RouteEval) {
+    fn best(&self) -> (&Route<W>, &RouteEval) {
         (&self.best, &self.best_eval)
     }
 }
@@ -474,6 +476,10 @@ impl Solver for Pso {
 mod tests {
     use super::*;
     use crate::fixtures::random_instance;
+
+    // The default capacity class unless a test names another.
+    type Problem = crate::problem::Problem;
+    type Pso = crate::solver::pso::Pso;
 
     #[test]
     fn inertia_falls_linearly_over_the_budget_then_holds() {
@@ -591,25 +597,33 @@ mod tests {
 
     #[test]
     fn the_warm_vector_decodes_to_the_warm_route_in_both_precisions() {
-        let inst = random_instance(30, 0.5, 31_000.0, 4);
-        let p = Problem::from_instance(&inst).unwrap();
-        let mut d = Decoder::new();
+        warm_round_trip::<2>(30, 0.5);
+        // Longer routes, so closer steps between the warm priorities.
+        warm_round_trip::<8>(400, 0.05);
+    }
+
+    /// Random routes on a network of `n` nodes in class `W` decode back
+    /// from their warm vector, in `f64` and in `f32`.
+    fn warm_round_trip<const W: usize>(n: usize, density: f64) {
+        let inst = random_instance(n, density, 31_000.0, 4);
+        let p = crate::problem::Problem::<W>::from_instance(&inst).unwrap();
+        let mut d = crate::decode::Decoder::<W>::new();
         let mut rng = PlannerRng::new(3);
-        let mut prio = [0.0; MAX_NODES];
+        let mut prio = PerNode::<f64, W>::splat(0.0);
         for _ in 0..50 {
-            for x in &mut prio[..30] {
+            for x in &mut prio[..n] {
                 *x = rng.uniform(PRIORITY_MIN, PRIORITY_MAX);
             }
-            let mut route = Route::new();
+            let mut route = crate::route::Route::<W>::new();
             let e = d.decode(&p, &prio, &mut route);
             assert!(e.feasible);
-            let mut again = Route::new();
-            warm_vector(&route, 30, &mut prio);
+            let mut again = crate::route::Route::<W>::new();
+            warm_vector(&route, n, &mut prio);
             d.decode(&p, &prio, &mut again);
-            assert_eq!(again.as_bytes(), route.as_bytes());
+            assert_eq!(again.ids(), route.ids());
             let single: Vec<f32> = prio.iter().map(|&x| x as f32).collect();
             d.decode(&p, &single, &mut again);
-            assert_eq!(again.as_bytes(), route.as_bytes());
+            assert_eq!(again.ids(), route.ids());
         }
     }
 

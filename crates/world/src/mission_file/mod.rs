@@ -136,7 +136,9 @@ pub enum Problem {
         message: String,
     },
     /// Too many waypoints.
-    #[error("{count} waypoints ({explicit} explicit + {generated} generated) exceed the planner's capacity of {max}")]
+    #[error(
+        "{count} waypoints ({explicit} explicit + {generated} generated) exceed the real-time planner's capacity of {max}"
+    )]
     Capacity {
         /// Total.
         count: usize,

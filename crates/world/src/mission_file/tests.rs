@@ -452,7 +452,7 @@ fn error_more_waypoints_than_the_planners_capacity() {
     let text = format!("{BASE}\n[generate]\nstatic = 100\ndynamic = 30\n");
     refused(
         &text,
-        &["135 waypoints (5 explicit + 130 generated) exceed the planner's capacity of 128"],
+        &["135 waypoints (5 explicit + 130 generated) exceed the real-time planner's capacity of 128"],
     );
     refused(
         &format!("{BASE}\n[generate]\nstatic = -1\n"),

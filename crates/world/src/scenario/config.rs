@@ -189,7 +189,7 @@ pub enum ConfigError {
         rule: &'static str,
     },
     /// `nodes` above the compile-time capacity.
-    #[error("scenario field `nodes` = {0} exceeds the planner's capacity of {MAX_NODES} nodes")]
+    #[error("scenario field `nodes` = {0} exceeds the real-time planner's capacity of {MAX_NODES} nodes")]
     TooManyNodes(usize),
     /// `nodes` below 2 (a start and a goal).
     #[error("scenario field `nodes` = {0}: a route needs at least 2 nodes (start and goal)")]
@@ -632,7 +632,7 @@ mod tests {
             (r#"{"format": "auv-scenario/2"}"#, "`format`"),
             (
                 r#"{"nodes": 129}"#,
-                "`nodes` = 129 exceeds the planner's capacity of 128",
+                "`nodes` = 129 exceeds the real-time planner's capacity of 128",
             ),
             (r#"{"nodes": 1, "dynamic": 0}"#, "`nodes` = 1"),
             (r#"{"nodes": -3}"#, "`nodes`: invalid value: integer `-3`"),

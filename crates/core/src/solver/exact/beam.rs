@@ -20,12 +20,12 @@ use super::search::{Level, Scratch, Search};
 pub(super) const BEAM_WIDTH: usize = 64;
 
 #[derive(Clone, Copy)]
-struct Partial {
-    route: Route,
+struct Partial<const W: usize> {
+    route: Route<W>,
     t: f64,
     v: f64,
-    visited: NodeSet,
-    avail: NodeSet,
+    visited: NodeSet<W>,
+    avail: NodeSet<W>,
     bound: f64,
     /// Index of the parent's levels in the previous level's list.
     parent: usize,
@@ -33,7 +33,14 @@ struct Partial {
 
 /// Runs the beam from the root (`levels` valid at the root) and offers every
 /// completion to `search`.
-pub(super) fn beam(search: &mut Search, root: Route, v0: f64, avail: NodeSet, levels: &[Level], sc: &mut Scratch) {
+pub(super) fn beam<const W: usize>(
+    search: &mut Search<'_, W>,
+    root: Route<W>,
+    v0: f64,
+    avail: NodeSet<W>,
+    levels: &[Level<W>],
+    sc: &mut Scratch,
+) {
     let s = root.get(0);
     let mut visited = NodeSet::EMPTY;
     visited.insert(s);
@@ -47,11 +54,11 @@ pub(super) fn beam(search: &mut Search, root: Route, v0: f64, avail: NodeSet, le
         parent: 0,
     }];
     // Levels valid for each beam member (before its own children are derived).
-    let mut member_levels: Vec<Vec<Level>> = vec![levels.to_vec()];
-    let mut next: Vec<Partial> = Vec::new();
+    let mut member_levels: Vec<Vec<Level<W>>> = vec![levels.to_vec()];
+    let mut next: Vec<Partial<W>> = Vec::new();
     while !beam.is_empty() && !search.past_deadline() {
         next.clear();
-        let mut derived: Vec<Vec<Level>> = Vec::with_capacity(beam.len());
+        let mut derived: Vec<Vec<Level<W>>> = Vec::with_capacity(beam.len());
         for (i, m) in beam.iter().enumerate() {
             let parent_lvls = &member_levels[m.parent];
             let mut lvls = vec![Level::default(); parent_lvls.len()];
@@ -59,7 +66,7 @@ pub(super) fn beam(search: &mut Search, root: Route, v0: f64, avail: NodeSet, le
                 search.derive_level(parent, m.avail, child, sc);
             }
             let u = m.route.last().unwrap_or(s);
-            let cands = NodeSet(search.p.neighbours(u).0 & (m.avail.0 | (1u128 << search.goal)));
+            let cands = search.p.neighbours(u) & (m.avail | NodeSet::single(search.goal));
             for c in cands.iter() {
                 let tc = m.t + search.p.time_s(u, c);
                 if tc + search.p.to_goal_s(c) > search.limit {
@@ -108,7 +115,7 @@ pub(super) fn beam(search: &mut Search, root: Route, v0: f64, avail: NodeSet, le
             }
             let dup = beam
                 .iter()
-                .any(|q: &Partial| q.visited == p.visited && q.route.last() == p.route.last());
+                .any(|q: &Partial<W>| q.visited == p.visited && q.route.last() == p.route.last());
             if !dup {
                 beam.push(*p);
             }

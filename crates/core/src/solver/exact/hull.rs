@@ -10,7 +10,7 @@ pub(super) struct Seg {
     pub(super) dt: f64,
     pub(super) dv: f64,
     pub(super) slope: f64,
-    pub(super) class: u8,
+    pub(super) class: u16,
 }
 
 /// A point (time, value) of a node's half-edge items, with the neighbours
@@ -19,8 +19,8 @@ pub(super) struct Seg {
 pub(super) struct Item {
     pub(super) t: f64,
     pub(super) v: f64,
-    pub(super) a: u8,
-    pub(super) b: u8,
+    pub(super) a: u16,
+    pub(super) b: u16,
 }
 
 /// Time first, then more value first, then by neighbours: the order the hull
@@ -37,13 +37,13 @@ pub(super) fn sort_items(items: &mut [Item]) {
 /// Appends to `out` the segments of the upper concave hull of `items`
 /// (sorted by [`sort_items`]) that starts at `base` and rises (positive
 /// slope); returns the neighbours named by its vertices. `stack` is scratch.
-pub(super) fn hull_segments(
+pub(super) fn hull_segments<const W: usize>(
     items: &[Item],
     base: Item,
-    class: u8,
+    class: u16,
     stack: &mut Vec<Item>,
     out: &mut Vec<Seg>,
-) -> NodeSet {
+) -> NodeSet<W> {
     stack.clear();
     stack.push(base);
     for &p in items.iter() {

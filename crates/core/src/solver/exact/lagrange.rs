@@ -32,7 +32,13 @@ struct Class {
 /// The root relaxation with the split `half` (row-major n×n: `half[v·n+a]`
 /// is the value of the half-edge at `v` towards `a`). Returns the bound and
 /// fills `x[v·n+a]` with the LP's use of that half-edge.
-fn root_lp(s: &Search, half: &[f64], avail: NodeSet, x: &mut [f64], verts: &mut Vec<Item>) -> f64 {
+fn root_lp<const W: usize>(
+    s: &Search<'_, W>,
+    half: &[f64],
+    avail: NodeSet<W>,
+    x: &mut [f64],
+    verts: &mut Vec<Item>,
+) -> f64 {
     let (n, start, goal) = (s.n, s.p.start(), s.goal);
     let mut items: Vec<Item> = Vec::with_capacity(n * n);
     let mut singles: Vec<Item> = Vec::with_capacity(n);
@@ -43,14 +49,14 @@ fn root_lp(s: &Search, half: &[f64], avail: NodeSet, x: &mut [f64], verts: &mut 
     let single = |v: usize, a: usize| Item {
         t: 0.5 * s.p.time_s(v, a),
         v: half[v * n + a],
-        a: a as u8,
-        b: a as u8,
+        a: a as u16,
+        b: a as u16,
     };
     // Interior classes: pairs of half-edges, with the filter of `build_class`.
-    let allowed = NodeSet(avail.0 | (1u128 << start) | (1u128 << goal));
+    let allowed = avail | NodeSet::single(start) | NodeSet::single(goal);
     for v in avail.iter() {
         singles.clear();
-        singles.extend(NodeSet(s.p.neighbours(v).0 & allowed.0).iter().map(|a| single(v, a)));
+        singles.extend((s.p.neighbours(v) & allowed).iter().map(|a| single(v, a)));
         sort_items(&mut singles);
         let (mut b1, mut b2) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
         singles.retain(|h| {
@@ -80,11 +86,11 @@ fn root_lp(s: &Search, half: &[f64], avail: NodeSet, x: &mut [f64], verts: &mut 
         let origin = Item {
             t: 0.0,
             v: 0.0,
-            a: v as u8,
-            b: v as u8,
+            a: v as u16,
+            b: v as u16,
         };
-        let class = classes.len() as u8;
-        hull_segments(&items, origin, class, &mut stack, &mut segs);
+        let class = classes.len() as u16;
+        hull_segments::<W>(&items, origin, class, &mut stack, &mut segs);
         classes.push(Class {
             node: v,
             first: verts.len(),
@@ -95,11 +101,11 @@ fn root_lp(s: &Search, half: &[f64], avail: NodeSet, x: &mut [f64], verts: &mut 
     // The start and the goal: one half-edge each, the cheapest as the base.
     let mut base_total = (0.0, s.node_val[start] + s.node_val[goal]);
     for (v, targets) in [
-        (start, NodeSet(avail.0 | (1u128 << goal))),
-        (goal, NodeSet(avail.0 | (1u128 << start))),
+        (start, avail | NodeSet::single(goal)),
+        (goal, avail | NodeSet::single(start)),
     ] {
         items.clear();
-        for a in NodeSet(s.p.neighbours(v).0 & targets.0).iter() {
+        for a in (s.p.neighbours(v) & targets).iter() {
             if v == start && s.p.time_s(v, a) + s.p.to_goal_s(a) > s.limit {
                 continue;
             }
@@ -111,8 +117,8 @@ fn root_lp(s: &Search, half: &[f64], avail: NodeSet, x: &mut [f64], verts: &mut 
         };
         base_total.0 += base.t;
         base_total.1 += base.v;
-        let class = classes.len() as u8;
-        hull_segments(&items, base, class, &mut stack, &mut segs);
+        let class = classes.len() as u16;
+        hull_segments::<W>(&items, base, class, &mut stack, &mut segs);
         classes.push(Class {
             node: v,
             first: verts.len(),
@@ -166,7 +172,7 @@ fn root_lp(s: &Search, half: &[f64], avail: NodeSet, x: &mut [f64], verts: &mut 
 
 /// Tunes `half` (see [`root_lp`]) to lower the root bound towards `target`,
 /// the incumbent's value. Keeps the best split found; returns its bound.
-pub(super) fn tune_split(s: &Search, half: &mut [f64], avail: NodeSet, target: f64) -> f64 {
+pub(super) fn tune_split<const W: usize>(s: &Search<'_, W>, half: &mut [f64], avail: NodeSet<W>, target: f64) -> f64 {
     let n = s.n;
     let mut x = vec![0.0; n * n];
     let mut verts = Vec::new();

@@ -50,15 +50,17 @@ mod tests;
 
 use std::time::{Duration, Instant};
 
+use crate::capacity::DEFAULT_WORDS;
+use crate::capacity::{PerNode, nodes_of};
 use crate::instance::Objective;
-use crate::problem::{MAX_NODES, NodeSet, Problem};
+use crate::problem::{NodeSet, Problem};
 use crate::route::{Route, RouteEval};
 
 use search::{Level, Memo, Scratch, Search, Split, memo_bits};
 
 /// How long the exact search may run.
 #[derive(Clone, Copy, Debug)]
-pub struct ExactSettings {
+pub struct ExactSettings<const W: usize = DEFAULT_WORDS> {
     /// Wall-clock limit; `None` runs to proof.
     pub time_limit: Option<Duration>,
     /// Limit on search nodes (deterministic stop); `None` for no limit.
@@ -66,7 +68,7 @@ pub struct ExactSettings {
     /// A route of this problem to start from (for example a heuristic's
     /// answer); ignored when not a feasible route. A good one speeds the
     /// proof up, since the bound prunes against the best route known.
-    pub warm_start: Option<Route>,
+    pub warm_start: Option<Route<W>>,
     /// Prove the format's full order: among routes of the best objective
     /// value, the one with the smallest time. `true` in
     /// [`ExactSettings::default`]; `false` proves the objective value only
@@ -81,7 +83,7 @@ pub struct ExactSettings {
     pub tune_split: bool,
 }
 
-impl Default for ExactSettings {
+impl<const W: usize> Default for ExactSettings<W> {
     fn default() -> Self {
         Self {
             time_limit: None,
@@ -96,9 +98,9 @@ impl Default for ExactSettings {
 
 /// Result of an exact solve.
 #[derive(Clone, Copy, Debug)]
-pub struct ExactOutcome {
+pub struct ExactOutcome<const W: usize = DEFAULT_WORDS> {
     /// Best route found (feasible).
-    pub route: Route,
+    pub route: Route<W>,
     /// Its figures.
     pub eval: RouteEval,
     /// No feasible route is better than `route` (with `break_ties` off: no
@@ -150,7 +152,10 @@ pub enum ExactError {
 }
 
 /// Solves `problem` exactly (or until the settings stop it).
-pub fn solve_exact(problem: &Problem, settings: &ExactSettings) -> Result<ExactOutcome, ExactError> {
+pub fn solve_exact<const W: usize>(
+    problem: &Problem<W>,
+    settings: &ExactSettings<W>,
+) -> Result<ExactOutcome<W>, ExactError> {
     let t0 = Instant::now();
     let n = problem.n();
     let (s, g) = (problem.start(), problem.goal());
@@ -242,8 +247,8 @@ pub fn solve_exact(problem: &Problem, settings: &ExactSettings) -> Result<ExactO
         best_eval: RouteEval::default(),
         have_best: false,
         nodes: 0,
-        children: (0..=MAX_NODES).map(|_| Vec::with_capacity(MAX_NODES)).collect(),
-        levels: Vec::with_capacity(MAX_NODES + 2),
+        children: (0..=nodes_of(W)).map(|_| Vec::with_capacity(nodes_of(W))).collect(),
+        levels: Vec::with_capacity(nodes_of(W) + 2),
         scratch: Scratch::default(),
         memo: Memo::new(memo_bits(n)),
         deadline: settings.time_limit.map(|d| t0 + d),
@@ -272,13 +277,13 @@ pub fn solve_exact(problem: &Problem, settings: &ExactSettings) -> Result<ExactO
     }
     // Classes valid at the root: interior nodes may neighbour the start too.
     let mut sc = Scratch::default();
-    let root_levels: Vec<Level> = (0..search.splits.len())
+    let root_levels: Vec<Level<W>> = (0..search.splits.len())
         .map(|k| {
             search.fresh_level(
                 k,
                 avail,
-                NodeSet(avail.0 | (1u128 << s) | (1u128 << g)),
-                NodeSet(avail.0 | (1u128 << s)),
+                avail | NodeSet::single(s) | NodeSet::single(g),
+                avail | NodeSet::single(s),
                 &mut sc,
             )
         })
@@ -335,10 +340,10 @@ pub fn solve_exact(problem: &Problem, settings: &ExactSettings) -> Result<ExactO
 
 /// Writes the quickest start→goal path into `route` (dense Dijkstra from
 /// the start with parent links, so the path is simple even with zero-time edges).
-fn quickest_route(p: &Problem, route: &mut Route) {
+fn quickest_route<const W: usize>(p: &Problem<W>, route: &mut Route<W>) {
     let n = p.n();
-    let mut dist = [f64::INFINITY; MAX_NODES];
-    let mut parent = [usize::MAX; MAX_NODES];
+    let mut dist = PerNode::<f64, W>::splat(f64::INFINITY);
+    let mut parent = PerNode::<usize, W>::splat(usize::MAX);
     let mut done = p.excluded();
     dist[p.start()] = 0.0;
     loop {
@@ -363,7 +368,7 @@ fn quickest_route(p: &Problem, route: &mut Route) {
         }
     }
     // Walk back from the goal (reachable: `solve_exact` checked it).
-    let mut rev = [0usize; MAX_NODES];
+    let mut rev = PerNode::<usize, W>::splat(0);
     let mut len = 0;
     let mut u = p.goal();
     while u != usize::MAX {

@@ -1,6 +1,7 @@
 //! Local search that polishes each new incumbent of the exact search.
 
-use crate::problem::{MAX_NODES, NodeSet, Problem};
+use crate::capacity::PerNode;
+use crate::problem::{NodeSet, Problem};
 use crate::route::{Route, RouteEval};
 
 /// Local search on a feasible route: repeatedly applies the best improving
@@ -8,16 +9,20 @@ use crate::route::{Route, RouteEval};
 /// removing a node, moving a node, swapping two nodes and reversing a
 /// stretch, until none improves. Deterministic (fixed scan order, strict
 /// improvement only).
-pub(super) fn polish(p: &Problem, mut route: Route, mut eval: RouteEval) -> (Route, RouteEval) {
+pub(super) fn polish<const W: usize>(
+    p: &Problem<W>,
+    mut route: Route<W>,
+    mut eval: RouteEval,
+) -> (Route<W>, RouteEval) {
     let n = p.n();
-    let mut buf = [0usize; MAX_NODES];
+    let mut buf = PerNode::<usize, W>::splat(0);
     loop {
         let len = route.len();
-        let mut used = NodeSet::EMPTY;
+        let mut used = NodeSet::<W>::EMPTY;
         for v in route.iter() {
             used.insert(v);
         }
-        let mut best: Option<(Route, RouteEval)> = None;
+        let mut best: Option<(Route<W>, RouteEval)> = None;
         let mut consider = |ids: &[usize]| {
             let Some(cand) = Route::from_slice(ids) else { return };
             if let Some(e) = p.evaluate(&cand)

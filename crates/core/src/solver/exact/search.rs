@@ -13,20 +13,20 @@ use super::polish::polish;
 /// half-edges to `allowed` nodes only, so it stays valid for any completion
 /// whose nodes lie in `allowed`.
 #[derive(Clone, Default)]
-pub(super) struct Level {
+pub(super) struct Level<const W: usize> {
     /// Which split of edge values the hulls use.
     pub(super) split: usize,
     /// Interior classes' segments, best slope first.
     pub(super) segs: Vec<Seg>,
     /// Per class: the neighbours its hull vertices use (a rebuild is needed
     /// only when one of them drops out).
-    pub(super) hull_nb: Vec<NodeSet>,
+    pub(super) hull_nb: Vec<NodeSet<W>>,
     /// Nodes the interior hulls may use as neighbours.
-    pub(super) allowed: NodeSet,
+    pub(super) allowed: NodeSet<W>,
     /// Goal class: cheapest half-edge, the hull above it, and the neighbours they use.
     pub(super) goal_base: Item,
     pub(super) goal_segs: Vec<Seg>,
-    pub(super) goal_nb: NodeSet,
+    pub(super) goal_nb: NodeSet<W>,
 }
 
 /// The half-edges of every node under one split of edge values between
@@ -40,7 +40,7 @@ pub(super) struct Split {
 
 impl Split {
     /// Builds the lists from `half[v·n + a]`, the share of edge v–a at v.
-    pub(super) fn new(p: &Problem, half: &[f64]) -> Self {
+    pub(super) fn new<const W: usize>(p: &Problem<W>, half: &[f64]) -> Self {
         let n = p.n();
         let mut halves = Vec::new();
         let mut at = vec![0];
@@ -50,8 +50,8 @@ impl Split {
                 halves.push(Item {
                     t: 0.5 * p.time_s(v, a),
                     v: half[v * n + a],
-                    a: a as u8,
-                    b: a as u8,
+                    a: a as u16,
+                    b: a as u16,
                 });
             }
             sort_items(&mut halves[first..]);
@@ -77,15 +77,15 @@ pub(super) struct Scratch {
 
 /// Per-depth scratch: children of one search node.
 #[derive(Clone, Copy)]
-pub(super) struct Child {
-    pub(super) node: u8,
+pub(super) struct Child<const W: usize> {
+    pub(super) node: u16,
     pub(super) bound: f64,
-    pub(super) avail: NodeSet,
+    pub(super) avail: NodeSet<W>,
 }
 
 /// Data and state of one solve.
-pub(super) struct Search<'p> {
-    pub(super) p: &'p Problem,
+pub(super) struct Search<'p, const W: usize> {
+    pub(super) p: &'p Problem<W>,
     pub(super) n: usize,
     pub(super) goal: usize,
     pub(super) limit: f64,
@@ -106,16 +106,16 @@ pub(super) struct Search<'p> {
     pub(super) break_ties: bool,
     /// Extra value a stored state needs to dominate (see [`Memo`]).
     pub(super) dom_margin: f64,
-    pub(super) route: Route,
-    pub(super) best_route: Route,
+    pub(super) route: Route<W>,
+    pub(super) best_route: Route<W>,
     pub(super) best_eval: RouteEval,
     pub(super) have_best: bool,
     pub(super) nodes: u64,
-    pub(super) children: Vec<Vec<Child>>,
+    pub(super) children: Vec<Vec<Child<W>>>,
     /// Per depth, one [`Level`] per split.
-    pub(super) levels: Vec<Vec<Level>>,
+    pub(super) levels: Vec<Vec<Level<W>>>,
     pub(super) scratch: Scratch,
-    pub(super) memo: Memo,
+    pub(super) memo: Memo<W>,
     pub(super) deadline: Option<Instant>,
     pub(super) node_limit: u64,
     pub(super) aborted: bool,
@@ -130,25 +130,30 @@ pub(super) struct Search<'p> {
 /// of the stored one that is at least as good. (`margin` is 0 for
 /// `max_weight`; for `paper_cost` it covers the |T_R − T_available| kink
 /// inside the feasibility tolerance.)
-pub(super) struct Memo {
-    pub(super) keys: Vec<(u128, u8)>,
+pub(super) struct Memo<const W: usize> {
+    pub(super) keys: Vec<(NodeSet<W>, u16)>,
     pub(super) vals: Vec<(f64, f64)>,
     pub(super) mask: usize,
 }
 
-impl Memo {
+impl<const W: usize> Memo<W> {
     pub(super) fn new(bits: u32) -> Self {
         let size = 1usize << bits;
         Self {
-            keys: vec![(0, u8::MAX); size],
+            keys: vec![(NodeSet::EMPTY, u16::MAX); size],
             vals: vec![(0.0, 0.0); size],
             mask: size - 1,
         }
     }
 
     #[inline]
-    pub(super) fn slot(&self, set: u128, node: u8) -> usize {
-        let mut h = (set as u64) ^ ((set >> 64) as u64).rotate_left(29) ^ (node as u64).wrapping_mul(0x9E37_79B9);
+    pub(super) fn slot(&self, set: NodeSet<W>, node: u16) -> usize {
+        // Word k rotated by 29·k (at 128 nodes: the low word, the high one
+        // rotated by 29).
+        let mut h = (node as u64).wrapping_mul(0x9E37_79B9);
+        for (k, w) in set.0.iter().enumerate() {
+            h ^= w.rotate_left((29 * k % 64) as u32);
+        }
         h = (h ^ (h >> 31)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         h ^= h >> 29;
         (h as usize) & self.mask
@@ -156,7 +161,7 @@ impl Memo {
 
     /// Whether a stored state dominates (t, v); otherwise records (t, v).
     #[inline]
-    pub(super) fn dominated(&mut self, set: u128, node: u8, t: f64, v: f64, margin: f64) -> bool {
+    pub(super) fn dominated(&mut self, set: NodeSet<W>, node: u16, t: f64, v: f64, margin: f64) -> bool {
         let i = self.slot(set, node);
         if self.keys[i] == (set, node) {
             let (st, sv) = self.vals[i];
@@ -182,7 +187,7 @@ pub(super) fn memo_bits(n: usize) -> u32 {
     (n as u32 + 4).clamp(8, 20)
 }
 
-impl<'p> Search<'p> {
+impl<'p, const W: usize> Search<'p, W> {
     #[inline]
     pub(super) fn val(&self, a: usize, b: usize) -> f64 {
         self.val[a * self.n + b]
@@ -191,7 +196,7 @@ impl<'p> Search<'p> {
     /// Nodes of `cand` that can still be visited from `u` with `rem` seconds
     /// left and the goal reached afterwards.
     #[inline]
-    pub(super) fn reachable(&self, u: usize, cand: NodeSet, rem: f64) -> NodeSet {
+    pub(super) fn reachable(&self, u: usize, cand: NodeSet<W>, rem: f64) -> NodeSet<W> {
         let mut out = NodeSet::EMPTY;
         let row = &self.sp[u * self.n..(u + 1) * self.n];
         for v in cand.iter() {
@@ -214,10 +219,10 @@ impl<'p> Search<'p> {
         &self,
         k: usize,
         v: usize,
-        allowed: NodeSet,
+        allowed: NodeSet<W>,
         sc: &mut Scratch,
         out: &mut Vec<Seg>,
-    ) -> NodeSet {
+    ) -> NodeSet<W> {
         sc.stack.clear();
         let (mut best1, mut best2) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
         for &h in self.splits[k].of(v) {
@@ -251,10 +256,10 @@ impl<'p> Search<'p> {
         let origin = Item {
             t: 0.0,
             v: 0.0,
-            a: v as u8,
-            b: v as u8,
+            a: v as u16,
+            b: v as u16,
         };
-        let mut named = hull_segments(&sc.items, origin, v as u8, &mut sc.stack, out);
+        let mut named = hull_segments(&sc.items, origin, v as u16, &mut sc.stack, out);
         named.remove(v);
         named
     }
@@ -267,7 +272,7 @@ impl<'p> Search<'p> {
         &self,
         k: usize,
         v: usize,
-        allowed: NodeSet,
+        allowed: NodeSet<W>,
         sc: &mut Scratch,
         reach: impl Fn(usize, f64) -> bool,
     ) -> Option<Item> {
@@ -281,14 +286,14 @@ impl<'p> Search<'p> {
     }
 
     /// Rebuilds the goal class over half-edges to `allowed` nodes.
-    pub(super) fn build_goal(&self, allowed: NodeSet, sc: &mut Scratch, lvl: &mut Level) {
+    pub(super) fn build_goal(&self, allowed: NodeSet<W>, sc: &mut Scratch, lvl: &mut Level<W>) {
         let k = lvl.split;
         let g = self.goal;
         lvl.goal_segs.clear();
         let mut stack = std::mem::take(&mut sc.stack);
         match self.singles(k, g, allowed, sc, |_, _| true) {
             Some(base) => {
-                lvl.goal_nb = hull_segments(&sc.items, base, g as u8, &mut stack, &mut lvl.goal_segs);
+                lvl.goal_nb = hull_segments(&sc.items, base, g as u16, &mut stack, &mut lvl.goal_segs);
                 lvl.goal_base = base;
                 lvl.goal_base.v += self.node_val[g];
             }
@@ -308,11 +313,11 @@ impl<'p> Search<'p> {
     pub(super) fn fresh_level(
         &self,
         k: usize,
-        classes: NodeSet,
-        allowed: NodeSet,
-        goal_allowed: NodeSet,
+        classes: NodeSet<W>,
+        allowed: NodeSet<W>,
+        goal_allowed: NodeSet<W>,
         sc: &mut Scratch,
-    ) -> Level {
+    ) -> Level<W> {
         let mut lvl = Level {
             split: k,
             hull_nb: vec![NodeSet::EMPTY; self.n],
@@ -332,17 +337,17 @@ impl<'p> Search<'p> {
     /// Derives `child` from `parent` for a search node whose completions use
     /// interior nodes of `avail` only: drops other classes, and rebuilds the
     /// hulls that used a neighbour no longer allowed.
-    pub(super) fn derive_level(&self, parent: &Level, avail: NodeSet, child: &mut Level, sc: &mut Scratch) {
-        let allowed = NodeSet(avail.0 | (1u128 << self.goal));
-        let gone = parent.allowed.0 & !allowed.0;
+    pub(super) fn derive_level(&self, parent: &Level<W>, avail: NodeSet<W>, child: &mut Level<W>, sc: &mut Scratch) {
+        let allowed = avail | NodeSet::single(self.goal);
+        let gone = parent.allowed - allowed;
         let k = parent.split;
         child.split = k;
         child.allowed = allowed;
         child.hull_nb.clear();
         child.hull_nb.extend_from_slice(&parent.hull_nb);
-        let mut stale = NodeSet::EMPTY;
+        let mut stale = NodeSet::<W>::EMPTY;
         for v in avail.iter() {
-            if parent.hull_nb[v].0 & gone != 0 {
+            if !(parent.hull_nb[v] & gone).is_empty() {
                 stale.insert(v);
             }
         }
@@ -359,7 +364,7 @@ impl<'p> Search<'p> {
             sort_segs(&mut segs);
             child.segs = segs;
         }
-        if parent.goal_nb.0 & gone != 0 {
+        if !(parent.goal_nb & gone).is_empty() {
             self.build_goal(avail, sc, child);
         } else {
             child.goal_base = parent.goal_base;
@@ -372,7 +377,15 @@ impl<'p> Search<'p> {
     /// The smallest bound over the splits (see [`Search::bound_one`]); stops
     /// early once one falls below the incumbent's target, which is all the
     /// caller needs to know then.
-    pub(super) fn bound(&self, lvls: &[Level], sc: &mut Scratch, u: usize, v0: f64, rem: f64, avail: NodeSet) -> f64 {
+    pub(super) fn bound(
+        &self,
+        lvls: &[Level<W>],
+        sc: &mut Scratch,
+        u: usize,
+        v0: f64,
+        rem: f64,
+        avail: NodeSet<W>,
+    ) -> f64 {
         let target = self.target();
         let mut ub = f64::INFINITY;
         for lvl in lvls {
@@ -387,13 +400,21 @@ impl<'p> Search<'p> {
     /// Upper bound on the final surrogate value of any completion of a path
     /// that stands at `u` with value `v0` and `rem` seconds left, using
     /// interior nodes of `avail` only (all of which `lvl` covers).
-    pub(super) fn bound_one(&self, lvl: &Level, sc: &mut Scratch, u: usize, v0: f64, rem: f64, avail: NodeSet) -> f64 {
+    pub(super) fn bound_one(
+        &self,
+        lvl: &Level<W>,
+        sc: &mut Scratch,
+        u: usize,
+        v0: f64,
+        rem: f64,
+        avail: NodeSet<W>,
+    ) -> f64 {
         if !lvl.goal_base.t.is_finite() {
             return f64::NEG_INFINITY;
         }
         // The current node's class: exactly one half-edge, to an available
         // node or to the goal, from which the goal is still reachable in time.
-        let targets = NodeSet(avail.0 | (1u128 << self.goal));
+        let targets = avail | NodeSet::single(self.goal);
         let Some(base) = self.singles(lvl.split, u, targets, sc, |a, half_t| {
             2.0 * half_t + self.p.to_goal_s(a) <= rem
         }) else {
@@ -404,7 +425,7 @@ impl<'p> Search<'p> {
             return f64::NEG_INFINITY;
         }
         sc.segs.clear();
-        hull_segments(&sc.items, base, u as u8, &mut sc.stack, &mut sc.segs);
+        hull_segments::<W>(&sc.items, base, u as u16, &mut sc.stack, &mut sc.segs);
         let mut total = v0 + base.v + lvl.goal_base.v;
         // Fill the LP greedily: merge three slope-sorted streams (interior
         // classes, goal, current node); within each class slopes fall, so
@@ -496,7 +517,16 @@ impl<'p> Search<'p> {
     /// with value `v`; `avail` are its candidate interior nodes, `ub` its
     /// bound, `levels[depth]` the classes valid for it.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn dfs(&mut self, u: usize, t: f64, v: f64, visited: NodeSet, avail: NodeSet, depth: usize, ub: f64) {
+    pub(super) fn dfs(
+        &mut self,
+        u: usize,
+        t: f64,
+        v: f64,
+        visited: NodeSet<W>,
+        avail: NodeSet<W>,
+        depth: usize,
+        ub: f64,
+    ) {
         if self.tick() {
             self.open_bound = self.open_bound.max(ub);
             return;
@@ -512,7 +542,7 @@ impl<'p> Search<'p> {
         }
         let mut kids = std::mem::take(&mut self.children[depth]);
         kids.clear();
-        let cands = NodeSet(self.p.neighbours(u).0 & (avail.0 | (1u128 << self.goal)));
+        let cands = self.p.neighbours(u) & (avail | NodeSet::single(self.goal));
         for c in cands.iter() {
             let tc = t + self.p.time_s(u, c);
             if tc + self.p.to_goal_s(c) > self.limit {
@@ -534,11 +564,11 @@ impl<'p> Search<'p> {
             if !self.promising(cub, tc + self.p.to_goal_s(c)) {
                 continue;
             }
-            if self.memo.dominated(vis.0, c as u8, tc, vc, self.dom_margin) {
+            if self.memo.dominated(vis, c as u16, tc, vc, self.dom_margin) {
                 continue;
             }
             kids.push(Child {
-                node: c as u8,
+                node: c as u16,
                 bound: cub,
                 avail: rest,
             });

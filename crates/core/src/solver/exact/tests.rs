@@ -4,6 +4,12 @@ use crate::fixtures::random_instance;
 use crate::instance::{Edge, Instance, Node};
 use crate::route::RouteStats;
 
+// The default capacity class unless a test names another.
+type Problem = crate::problem::Problem;
+type NodeSet = crate::problem::NodeSet;
+type Route = crate::route::Route;
+type ExactSettings = crate::solver::exact::ExactSettings;
+
 /// Best route by plain enumeration of every simple start→goal path.
 fn brute_force(p: &Problem) -> Option<(Route, RouteEval)> {
     fn walk(p: &Problem, route: &mut Route, used: NodeSet, best: &mut Option<(Route, RouteEval)>) {
@@ -350,7 +356,7 @@ fn unsupported_cases_are_errors() {
 
 #[test]
 fn hull_keeps_only_the_rising_concave_chain() {
-    let it = |t: f64, v: f64, a: u8| Item { t, v, a, b: a };
+    let it = |t: f64, v: f64, a: u16| Item { t, v, a, b: a };
     // (1,1) and (2,3) and (4,4): (2,3) is on the hull, (1,1) is under the
     // chord origin→(2,3); (3,2) gives no more value than (2,3); (5,4) neither.
     let mut items = vec![
@@ -362,7 +368,7 @@ fn hull_keeps_only_the_rising_concave_chain() {
     ];
     sort_items(&mut items);
     let (mut stack, mut out) = (Vec::new(), Vec::<Seg>::new());
-    let named = hull_segments(&items, it(0.0, 0.0, 0), 9, &mut stack, &mut out);
+    let named = hull_segments::<2>(&items, it(0.0, 0.0, 0), 9, &mut stack, &mut out);
     let pts: Vec<(f64, f64)> = out.iter().map(|s| (s.dt, s.dv)).collect();
     assert_eq!(pts, vec![(2.0, 3.0), (2.0, 1.0)]);
     assert!(out.iter().all(|s| s.class == 9));
@@ -371,7 +377,7 @@ fn hull_keeps_only_the_rising_concave_chain() {
     let mut items = vec![it(0.0, 2.0, 1), it(1.0, 3.0, 2)];
     sort_items(&mut items);
     out.clear();
-    hull_segments(&items, it(0.0, 0.0, 0), 0, &mut stack, &mut out);
+    hull_segments::<2>(&items, it(0.0, 0.0, 0), 0, &mut stack, &mut out);
     assert_eq!(out[0].dt, 0.0);
     assert_eq!(out[0].slope, f64::INFINITY);
     assert_eq!(out.len(), 2);
