@@ -14,3 +14,4 @@ pub mod montecarlo;
 pub mod plot;
 pub mod plot_quality;
 pub mod serve;
+pub mod shore;

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use crate::mission::log::with_log_writer;
 use auv_core::solver::{Algorithm, Solver};
-use auv_messages::msg::{Plan, PlannerStatus, VehicleState, WaypointSnapshot};
+use auv_messages::msg::{CommandAck, OperatorCommand, Plan, PlannerStatus, VehicleState, WaypointSnapshot};
 use auv_messages::wire::{FaultCycle, PLAN_FAULTS, WireRules};
 use auv_platform::signal;
 use auv_service::alloc;
@@ -231,6 +231,8 @@ pub type ShmPlannerPorts = PlannerPorts<
     IpcInbox<Shm, WaypointSnapshot>,
     FaultyPlans<IpcOutbox<Shm, Plan>>,
     IpcOutbox<Shm, PlannerStatus>,
+    IpcInbox<Shm, OperatorCommand>,
+    IpcOutbox<Shm, CommandAck>,
 >;
 
 /// Opens the planner's ports in the context's domain; inputs are checked
@@ -250,6 +252,8 @@ pub fn open_ports(
             .with_check(rules.snapshot_check()),
         plans: FaultyPlans::new(ctx.outbox::<Plan>(stamp)?, inject_plans),
         status: ctx.outbox::<PlannerStatus>(stamp)?,
+        commands: Guarded::new(ctx.inbox::<OperatorCommand>()?, fingerprint, "planner"),
+        acks: ctx.outbox::<CommandAck>(stamp)?,
     })
 }
 

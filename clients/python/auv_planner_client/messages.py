@@ -190,10 +190,44 @@ class PlannerStatus(ctypes.Structure):
         return "auv.PlannerStatus.v4"
 
 
+class OperatorCommand(ctypes.Structure):
+    """operator (through the shore link) -> planner: one command, unique ``command_id``."""
+
+    _fields_ = [
+        ("header", Header),
+        ("command_id", c_uint64),
+        ("value_s", c_double),
+        ("kind", c_uint32),
+        ("node", c_uint32),
+    ]
+
+    @staticmethod
+    def type_name():
+        return "auv.OperatorCommand.v1"
+
+
+class CommandAck(ctypes.Structure):
+    """planner -> shore link: the answer to one OperatorCommand."""
+
+    _fields_ = [
+        ("header", Header),
+        ("command_id", c_uint64),
+        ("plan_seq", c_uint64),
+        ("kind", c_uint32),
+        ("status", c_uint32),
+        ("reason", c_uint32),
+        ("replan", c_uint32),
+    ]
+
+    @staticmethod
+    def type_name():
+        return "auv.CommandAck.v1"
+
+
 #: Nested structs, as ``planner wire-layout`` lists them under "structs".
 STRUCTS = [Header, WireNode, WireEdge, AllocCounters]
 #: Messages, as ``planner wire-layout`` lists them under "messages".
-MESSAGES = [WaypointSnapshot, VehicleState, Plan, PlannerStatus]
+MESSAGES = [WaypointSnapshot, VehicleState, Plan, PlannerStatus, OperatorCommand, CommandAck]
 
 
 class ObjectiveCode:
@@ -231,6 +265,19 @@ class TriggerKind:
     TIME_CHANGED = 3
     INFEASIBLE = 4
     SENSOR_BACK = 5
+    OPERATOR = 6
+
+
+class CommandKind:
+    ABORT_TO_GOAL = 1
+    SET_TIME_BUDGET = 2
+    ADD_TASK = 3
+    REMOVE_TASK = 4
+
+
+class AckStatus:
+    APPLIED = 1
+    REFUSED = 2
 
 
 class PlannerPhase:
@@ -268,6 +315,18 @@ ENUMS = {
         "time_changed": 3,
         "infeasible": 4,
         "sensor_back": 5,
+        "operator": 6,
+    },
+    "CommandKind": {"abort_to_goal": 1, "set_time_budget": 2, "add_task": 3, "remove_task": 4},
+    "AckStatus": {"applied": 1, "refused": 2},
+    "RefuseReason": {
+        "none": 0,
+        "malformed": 1,
+        "not_running": 2,
+        "budget_out_of_range": 3,
+        "bad_waypoint": 4,
+        "already_visited": 5,
+        "no_change": 6,
     },
     "PlannerPhase": {"waiting": 0, "running": 1, "finished": 2},
     "RejectKind": {name: k for k, name in enumerate(REJECT_KIND_NAMES)},

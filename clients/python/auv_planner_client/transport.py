@@ -49,7 +49,11 @@ VEHICLE_STATE = Topic(m.VehicleState, "vehicle/state/v2", 2, ("planner", "sensor
 # Plans queue deep: an observer counting them must not lose one in a burst.
 PLAN = Topic(m.Plan, "planner/plan/v2", 3, ("vehicle",), 0, 64)
 STATUS = Topic(m.PlannerStatus, "planner/status/v4", 4, ("vehicle",), 1, 2)
-TOPICS = [WAYPOINTS, VEHICLE_STATE, PLAN, STATUS]
+# Operator commands (from the shore link) and their acks: never replayed,
+# each one matters. Acks wake no role: the shore link polls them.
+COMMAND = Topic(m.OperatorCommand, "operator/command/v1", 7, ("planner",), 0, 16)
+ACK = Topic(m.CommandAck, "planner/ack/v1", 8, (), 0, 16)
+TOPICS = [WAYPOINTS, VEHICLE_STATE, PLAN, STATUS, COMMAND, ACK]
 
 MAX_PREFIX_LEN = 32
 

@@ -251,6 +251,9 @@ pub enum TriggerKind {
     /// The first snapshot of a restarted sensor (a new sender session):
     /// the network may have moved on while it was away.
     SensorBack = 5,
+    /// An operator's command changed what to plan for (budget, abort,
+    /// tasks), [`OperatorCommand`].
+    Operator = 6,
 }
 
 /// planner → vehicle-sim: the route to follow from the node the vehicle is
@@ -480,6 +483,141 @@ pub struct PlannerStatus {
     pub _pad: u32,
 }
 
+/// What an operator asks for, [`OperatorCommand::kind`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum CommandKind {
+    /// Plan the quickest feasible route to the goal now, and keep doing so
+    /// at every later trigger (tasks no longer count).
+    AbortToGoal = 1,
+    /// Plan within the mission time `value_s` (a total, in mission time,
+    /// like `time_available_s`): at most the vehicle's own budget, more
+    /// than the mission time already used.
+    SetTimeBudget = 2,
+    /// Plan through waypoint `node` again (undo a [`CommandKind::RemoveTask`]).
+    AddTask = 3,
+    /// Never plan through waypoint `node` (its tasks are dropped).
+    RemoveTask = 4,
+}
+
+/// operator (through the shore link) → planner: one command, identified by
+/// `command_id` so that a command sent again after a reconnect is
+/// acknowledged again but never applied twice.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, ZeroCopySend)]
+#[type_name("auv.OperatorCommand.v1")]
+pub struct OperatorCommand {
+    /// Common header; `mission_time_s` is the link's latest vehicle time.
+    pub header: Header,
+    /// Chosen by the operator's console, unique per command, never 0.
+    pub command_id: u64,
+    /// [`CommandKind::SetTimeBudget`]: the new mission time budget, s.
+    pub value_s: f64,
+    /// [`CommandKind`].
+    pub kind: u32,
+    /// [`CommandKind::AddTask`], [`CommandKind::RemoveTask`]: the waypoint
+    /// ([`NO_NODE`] otherwise).
+    pub node: u32,
+}
+
+/// How a command ended, [`CommandAck::status`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum AckStatus {
+    /// Applied; `plan_seq` names the plan it caused (0: none could be made).
+    Applied = 1,
+    /// Refused; `reason` says why. Nothing changed.
+    Refused = 2,
+}
+
+/// Why a command was refused, [`CommandAck::reason`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum RefuseReason {
+    /// Not refused.
+    None = 0,
+    /// The message failed validation (unknown kind, zero id, bad number).
+    Malformed = 1,
+    /// No mission to command: the planner has no vehicle state and snapshot
+    /// yet, or the mission is over.
+    NotRunning = 2,
+    /// The budget is not above the mission time used, or above the vehicle's own budget.
+    BudgetOutOfRange = 3,
+    /// The waypoint is not in the network, or is the start or the goal.
+    BadWaypoint = 4,
+    /// The waypoint was already visited (nothing left to add or remove).
+    AlreadyVisited = 5,
+    /// Removing a waypoint that is already removed, or adding one that was not.
+    NoChange = 6,
+}
+
+impl RefuseReason {
+    /// All reasons, in code order.
+    pub const ALL: [RefuseReason; 7] = [
+        Self::None,
+        Self::Malformed,
+        Self::NotRunning,
+        Self::BudgetOutOfRange,
+        Self::BadWaypoint,
+        Self::AlreadyVisited,
+        Self::NoChange,
+    ];
+
+    /// snake_case name for acks, reports and logs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Malformed => "malformed",
+            Self::NotRunning => "not_running",
+            Self::BudgetOutOfRange => "budget_out_of_range",
+            Self::BadWaypoint => "bad_waypoint",
+            Self::AlreadyVisited => "already_visited",
+            Self::NoChange => "no_change",
+        }
+    }
+}
+
+impl CommandKind {
+    /// All kinds, in code order.
+    pub const ALL: [CommandKind; 4] = [Self::AbortToGoal, Self::SetTimeBudget, Self::AddTask, Self::RemoveTask];
+
+    /// The kebab-case name the shore console takes (`abort-to-goal`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::AbortToGoal => "abort-to-goal",
+            Self::SetTimeBudget => "set-time-budget",
+            Self::AddTask => "add-task",
+            Self::RemoveTask => "remove-task",
+        }
+    }
+
+    /// The kind named `name` (as [`CommandKind::as_str`] writes it).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.as_str() == name)
+    }
+}
+
+/// planner → shore link: the answer to one [`OperatorCommand`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, ZeroCopySend)]
+#[type_name("auv.CommandAck.v1")]
+pub struct CommandAck {
+    /// Common header; `mission_time_s` is the planner's vehicle time.
+    pub header: Header,
+    /// The command answered.
+    pub command_id: u64,
+    /// `seq` of the plan the command caused (0: refused, or no plan).
+    pub plan_seq: u64,
+    /// [`CommandKind`] of the command answered (0 when it was malformed).
+    pub kind: u32,
+    /// [`AckStatus`].
+    pub status: u32,
+    /// [`RefuseReason`].
+    pub reason: u32,
+    /// Re-plan counter of that plan (0: none).
+    pub replan: u32,
+}
+
 /// Latency bench only: a raw ping of the same size as a [`VehicleState`],
 /// answered by a [`RawPong`] the size of a [`Plan`], so the raw iceoryx2
 /// round trip carries exactly the bytes a trigger and its plan carry.
@@ -560,8 +698,16 @@ impl_message!(WaypointSnapshot, "waypoint snapshot");
 impl_message!(VehicleState, "vehicle state");
 impl_message!(Plan, "plan");
 impl_message!(PlannerStatus, "planner status");
+impl_message!(OperatorCommand, "operator command");
+impl_message!(CommandAck, "command ack");
 impl_message!(RawPing, "bench ping");
 impl_message!(RawPong, "bench pong");
+
+/// The versioned type name of message `T` (`auv.Plan.v2`).
+pub fn type_name_of<T: Message>() -> &'static str {
+    // SAFETY: `type_name` only returns the static string the derive set.
+    unsafe { <T as ZeroCopySend>::type_name() }
+}
 
 /// Decodes a `u32` enum code.
 pub trait FromCode: Sized {
@@ -584,7 +730,10 @@ codes!(ObjectiveCode: MaxWeight, PaperCost);
 codes!(VehicleMode: NoPlan, Travelling, Working, Holding, Finished);
 codes!(VehicleEvent: Periodic, Start, Arrival, Tick, Finished);
 codes!(Outcome: Running, GoalReached, TimedOut, Aborted, SafeHold);
-codes!(TriggerKind: Initial, Arrival, EdgeLost, TimeChanged, Infeasible, SensorBack);
+codes!(TriggerKind: Initial, Arrival, EdgeLost, TimeChanged, Infeasible, SensorBack, Operator);
+codes!(CommandKind: AbortToGoal, SetTimeBudget, AddTask, RemoveTask);
+codes!(AckStatus: Applied, Refused);
+codes!(RefuseReason: None, Malformed, NotRunning, BudgetOutOfRange, BadWaypoint, AlreadyVisited, NoChange);
 codes!(PlannerPhase: Waiting, Running, Finished);
 
 fn finite(v: f64) -> Result<(), RejectKind> {
@@ -744,6 +893,32 @@ impl Validate for PlannerStatus {
         code::<PlannerPhase>(self.phase)?;
         if !(self.cut_weight.is_finite() && self.cut_warm_start_weight.is_finite()) {
             return Err(RejectKind::NonFinite);
+        }
+        Ok(())
+    }
+}
+
+impl Validate for OperatorCommand {
+    fn validate(&self) -> Result<(), RejectKind> {
+        header_ok(&self.header)?;
+        if self.command_id == 0 {
+            return Err(RejectKind::Malformed);
+        }
+        match code::<CommandKind>(self.kind)? {
+            CommandKind::SetTimeBudget => positive(self.value_s),
+            CommandKind::AddTask | CommandKind::RemoveTask => node(self.node, MAX_NODES).map(|_| ()),
+            CommandKind::AbortToGoal => Ok(()),
+        }
+    }
+}
+
+impl Validate for CommandAck {
+    fn validate(&self) -> Result<(), RejectKind> {
+        header_ok(&self.header)?;
+        code::<AckStatus>(self.status)?;
+        code::<RefuseReason>(self.reason)?;
+        if self.kind != 0 {
+            code::<CommandKind>(self.kind)?;
         }
         Ok(())
     }
@@ -944,6 +1119,8 @@ mod tests {
             assert_eq!(<VehicleState as ZeroCopySend>::type_name(), "auv.VehicleState.v2");
             assert_eq!(<Plan as ZeroCopySend>::type_name(), "auv.Plan.v2");
             assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v4");
+            assert_eq!(<OperatorCommand as ZeroCopySend>::type_name(), "auv.OperatorCommand.v1");
+            assert_eq!(<CommandAck as ZeroCopySend>::type_name(), "auv.CommandAck.v1");
         }
     }
 
@@ -957,6 +1134,8 @@ mod tests {
             40 + 8 * 6 + 4 * 6 + 32 * MAX_NODES + 32 * MAX_EDGES
         );
         assert_eq!(core::mem::size_of::<Plan>(), 40 + 8 * 10 + 4 * 8 + MAX_NODES);
+        assert_eq!(core::mem::size_of::<OperatorCommand>(), 40 + 8 * 2 + 4 * 2);
+        assert_eq!(core::mem::size_of::<CommandAck>(), 40 + 8 * 2 + 4 * 4);
         assert_eq!(core::mem::size_of::<RawPing>(), core::mem::size_of::<VehicleState>());
         assert_eq!(core::mem::size_of::<RawPong>(), core::mem::size_of::<Plan>());
         assert_eq!(
@@ -1024,7 +1203,15 @@ mod tests {
         }
         assert_eq!(TriggerKind::from_code(4), Some(TriggerKind::Infeasible));
         assert_eq!(TriggerKind::from_code(5), Some(TriggerKind::SensorBack));
-        assert_eq!(TriggerKind::from_code(6), None);
+        assert_eq!(TriggerKind::from_code(6), Some(TriggerKind::Operator));
+        assert_eq!(TriggerKind::from_code(7), None);
+        for k in CommandKind::ALL {
+            assert_eq!(CommandKind::from_name(k.as_str()), Some(k));
+            assert_eq!(CommandKind::from_code(k as u32), Some(k));
+        }
+        for r in RefuseReason::ALL {
+            assert_eq!(RefuseReason::from_code(r as u32), Some(r));
+        }
         assert_eq!(
             VehicleMode::from_code(VehicleMode::Holding as u32),
             Some(VehicleMode::Holding)
@@ -1047,6 +1234,8 @@ mod tests {
             let _ = bytes_to::<Plan>(&bytes).validate();
             let _ = bytes_to::<PlannerStatus>(&bytes).validate();
             let _ = bytes_to::<WaypointSnapshot>(&bytes).validate();
+            let _ = bytes_to::<OperatorCommand>(&bytes).validate();
+            let _ = bytes_to::<CommandAck>(&bytes).validate();
         }
 
         #[test]

@@ -30,8 +30,8 @@ use auv_core::rng::{PlannerRng, derive_seed};
 use auv_core::route::{Route, RouteEval};
 use auv_core::solver::{Algorithm, Budget, Solver, StopReason, run};
 use auv_messages::msg::{
-    Outcome, Plan, PlannerPhase, PlannerStatus, RejectCounters, TriggerKind, VehicleMode, VehicleState,
-    WaypointSnapshot, boxed_zeroed,
+    AckStatus, CommandAck, CommandKind, FromCode, OperatorCommand, Outcome, Plan, PlannerPhase, PlannerStatus,
+    RefuseReason, RejectCounters, TriggerKind, VehicleMode, VehicleState, WaypointSnapshot, boxed_zeroed,
 };
 use auv_messages::network::{copy_snapshot, fill_problem, objective};
 use auv_platform::clock::mono_now_ns;
@@ -145,6 +145,24 @@ pub enum ServiceEvent {
         /// The vehicle's position (x, y) when the trigger was answered (for plots), m.
         at: (f64, f64),
     },
+    /// An operator's command was applied or refused.
+    Command {
+        /// Vehicle's mission time, s.
+        t: f64,
+        /// The command's id.
+        id: u64,
+        /// What it asked for.
+        kind: CommandKind,
+        /// Applied or refused.
+        status: AckStatus,
+        /// Why it was refused ([`RefuseReason::None`] when applied).
+        reason: RefuseReason,
+        /// The new budget of a set-time-budget, the waypoint of a task
+        /// command (0 otherwise).
+        value: f64,
+        /// A repeat of a command already answered (answered again, not applied again).
+        repeat: bool,
+    },
     /// The vehicle reported the end of the mission.
     Finished {
         /// Mission time, s.
@@ -166,7 +184,7 @@ struct Pending {
 
 fn rank(k: TriggerKind) -> u8 {
     match k {
-        TriggerKind::Initial | TriggerKind::Arrival => 3,
+        TriggerKind::Initial | TriggerKind::Arrival | TriggerKind::Operator => 3,
         TriggerKind::EdgeLost => 2,
         TriggerKind::Infeasible => 1,
         TriggerKind::TimeChanged | TriggerKind::SensorBack => 0,
@@ -196,6 +214,54 @@ struct PlanView {
     /// (session, arrivals, to_node) of the vehicle state it answered.
     key: (u64, u32, usize),
 }
+
+/// What the operator's commands changed, applied at every re-plan.
+#[derive(Clone, Copy, Debug, Default)]
+struct OperatorView {
+    /// Plan the quickest path to the goal from now on.
+    abort: bool,
+    /// Mission time the budget ends at, s (`None`: the vehicle's own budget).
+    budget_end_s: Option<f64>,
+    /// Waypoints never to plan through.
+    removed: NodeSet,
+}
+
+/// The answer to one command, kept to answer a repeat of it the same way.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AckRecord {
+    /// The command's id (0: empty slot).
+    pub id: u64,
+    /// [`CommandKind`] code (0 when malformed).
+    pub kind: u32,
+    /// Applied or refused.
+    pub status: u32,
+    /// [`RefuseReason`] code.
+    pub reason: u32,
+    /// `seq` of the plan it caused (0: none).
+    pub plan_seq: u64,
+    /// Re-plan counter of that plan (0: none).
+    pub replan: u32,
+}
+
+impl AckRecord {
+    /// Writes the ack message for this answer at mission time `t`, s.
+    pub fn fill(&self, t: f64, m: &mut CommandAck) {
+        m.header.mission_time_s = t.max(0.0);
+        m.command_id = self.id;
+        m.plan_seq = self.plan_seq;
+        m.kind = self.kind;
+        m.status = self.status;
+        m.reason = self.reason;
+        m.replan = self.replan;
+    }
+}
+
+/// Commands remembered for repeats (our choice: far more than an operator
+/// sends within a reconnect; the oldest is forgotten first).
+const RECENT_COMMANDS: usize = 64;
+
+/// Applied commands whose plan is still to be published.
+const PENDING_ACKS: usize = 8;
 
 /// Counters the status message and the report carry.
 #[derive(Clone, Copy, Debug, Default)]
@@ -294,6 +360,12 @@ pub struct PlannerCore {
     last_state: Box<VehicleState>,
     /// SCHED_FIFO priority the service thread runs at (0: normal scheduling).
     rt_priority: u32,
+    operator: OperatorView,
+    /// Answers to the latest commands, a ring.
+    recent: [AckRecord; RECENT_COMMANDS],
+    recent_next: usize,
+    /// Applied commands waiting for the plan they cause.
+    pending_acks: [AckRecord; PENDING_ACKS],
 }
 
 /// Largest latency the histogram resolves, µs (one minute: anything above is a miss anyway).
@@ -322,6 +394,10 @@ impl PlannerCore {
             warm: Route::new(),
             last_state: boxed_zeroed(),
             rt_priority: 0,
+            operator: OperatorView::default(),
+            recent: [AckRecord::default(); RECENT_COMMANDS],
+            recent_next: 0,
+            pending_acks: [AckRecord::default(); PENDING_ACKS],
         }
     }
 
@@ -491,14 +567,181 @@ impl PlannerCore {
         }
     }
 
+    /// Handles an accepted operator command, taken off the transport at
+    /// `received_ns`: validates it against the mission (see
+    /// [`RefuseReason`]), applies it and triggers a re-plan. Returns the ack
+    /// to send now (a refusal, or the stored answer to a repeat); an applied
+    /// command's ack waits for its plan ([`PlannerCore::take_acks`]).
+    pub fn on_command(
+        &mut self,
+        c: &OperatorCommand,
+        received_ns: u64,
+        events: &mut dyn FnMut(&ServiceEvent),
+    ) -> Option<AckRecord> {
+        let t = self.vehicle.mission_time_s;
+        let kind = CommandKind::from_code(c.kind);
+        let value = match kind {
+            Some(CommandKind::SetTimeBudget) => c.value_s,
+            Some(CommandKind::AddTask | CommandKind::RemoveTask) => f64::from(c.node),
+            _ => 0.0,
+        };
+        let repeat = self
+            .recent
+            .iter()
+            .chain(self.pending_acks.iter())
+            .find(|r| r.id == c.command_id && r.id != 0)
+            .copied();
+        if let Some(r) = repeat {
+            if let Some(kind) = kind {
+                events(&ServiceEvent::Command {
+                    t,
+                    id: c.command_id,
+                    kind,
+                    status: AckStatus::from_code(r.status).unwrap_or(AckStatus::Refused),
+                    reason: RefuseReason::from_code(r.reason).unwrap_or(RefuseReason::Malformed),
+                    value,
+                    repeat: true,
+                });
+            }
+            // A repeat of one still waiting for its plan is answered with it.
+            return (r.plan_seq != 0 || r.status == AckStatus::Refused as u32).then_some(r);
+        }
+        let verdict = match kind {
+            None => Err(RefuseReason::Malformed),
+            Some(k) => self.check_command(k, c),
+        };
+        let mut rec = AckRecord {
+            id: c.command_id,
+            kind: kind.map_or(0, |k| k as u32),
+            status: AckStatus::Applied as u32,
+            reason: RefuseReason::None as u32,
+            plan_seq: 0,
+            replan: 0,
+        };
+        if let Some(kind) = kind {
+            events(&ServiceEvent::Command {
+                t,
+                id: c.command_id,
+                kind,
+                status: if verdict.is_ok() {
+                    AckStatus::Applied
+                } else {
+                    AckStatus::Refused
+                },
+                reason: verdict.err().unwrap_or(RefuseReason::None),
+                value,
+                repeat: false,
+            });
+        }
+        match (verdict, kind) {
+            (Ok(()), Some(k)) => {
+                match k {
+                    CommandKind::AbortToGoal => self.operator.abort = true,
+                    CommandKind::SetTimeBudget => self.operator.budget_end_s = Some(c.value_s),
+                    CommandKind::AddTask => self.operator.removed.remove(c.node as usize),
+                    CommandKind::RemoveTask => self.operator.removed.insert(c.node as usize),
+                }
+                match self.pending_acks.iter_mut().find(|r| r.id == 0) {
+                    Some(slot) => *slot = rec,
+                    // More applied commands than one plan answers: answer
+                    // this one now, without a plan number.
+                    None => {
+                        self.remember(rec);
+                        return Some(rec);
+                    }
+                }
+                self.trigger(TriggerKind::Operator, c.header.sent_mono_ns, received_ns, t);
+                None
+            }
+            (verdict, _) => {
+                rec.status = AckStatus::Refused as u32;
+                rec.reason = verdict.err().unwrap_or(RefuseReason::Malformed) as u32;
+                self.remember(rec);
+                Some(rec)
+            }
+        }
+    }
+
+    fn check_command(&self, kind: CommandKind, c: &OperatorCommand) -> Result<(), RefuseReason> {
+        if !self.vehicle.known || !self.have_snapshot || self.finished {
+            return Err(RefuseReason::NotRunning);
+        }
+        let v = &self.vehicle;
+        match kind {
+            CommandKind::AbortToGoal if self.operator.abort => Err(RefuseReason::NoChange),
+            CommandKind::AbortToGoal => Ok(()),
+            CommandKind::SetTimeBudget => {
+                let own = self.snapshot.time_available_s;
+                if c.value_s.is_finite() && c.value_s > v.mission_time_s && c.value_s <= own {
+                    Ok(())
+                } else {
+                    Err(RefuseReason::BudgetOutOfRange)
+                }
+            }
+            CommandKind::AddTask | CommandKind::RemoveTask => {
+                let id = c.node as usize;
+                let s = &self.snapshot;
+                if id >= s.node_count as usize || id == s.start as usize || id == s.goal as usize {
+                    return Err(RefuseReason::BadWaypoint);
+                }
+                if v.visited.contains(id) || v.to_node == id {
+                    return Err(RefuseReason::AlreadyVisited);
+                }
+                let removed = self.operator.removed.contains(id);
+                if removed == (kind == CommandKind::RemoveTask) {
+                    return Err(RefuseReason::NoChange);
+                }
+                Ok(())
+            }
+        }
+    }
+
+    fn remember(&mut self, rec: AckRecord) {
+        self.recent[self.recent_next] = rec;
+        self.recent_next = (self.recent_next + 1) % RECENT_COMMANDS;
+    }
+
+    /// Whether applied commands wait for their plan.
+    pub fn has_pending_acks(&self) -> bool {
+        self.pending_acks.iter().any(|r| r.id != 0)
+    }
+
+    /// Answers the applied commands waiting for a plan: the plan `plan_seq`
+    /// (re-plan `replan`) was published for them, or none could be made (0, 0).
+    pub fn take_acks(&mut self, plan_seq: u64, replan: u32, each: &mut dyn FnMut(&AckRecord)) {
+        for k in 0..PENDING_ACKS {
+            let mut r = self.pending_acks[k];
+            if r.id == 0 {
+                continue;
+            }
+            r.plan_seq = plan_seq;
+            r.replan = replan;
+            self.pending_acks[k] = AckRecord::default();
+            self.remember(r);
+            each(&r);
+        }
+    }
+
     /// Where the vehicle will be free, its budget from there and what to exclude.
     fn planning_frame(&self) -> (usize, f64, NodeSet) {
         let v = &self.vehicle;
         let start = v.to_node;
         let mut excluded = v.visited;
+        for id in self.operator.removed.iter() {
+            excluded.insert(id);
+        }
         excluded.remove(start);
-        // A budget must be > 0; an exhausted one plans the quickest path.
-        let budget = (v.time_left_s - v.eta_free_s - self.config().reserve_s).max(1e-3);
+        let time_left = match self.operator.budget_end_s {
+            Some(end) => v.time_left_s.min(end - v.mission_time_s),
+            None => v.time_left_s,
+        };
+        // A budget must be > 0; an exhausted one plans the quickest path
+        // (which is what an abort to the goal asks for).
+        let budget = if self.operator.abort {
+            1e-3
+        } else {
+            (time_left - v.eta_free_s - self.config().reserve_s).max(1e-3)
+        };
         (start, budget, excluded)
     }
 
@@ -533,6 +776,10 @@ impl PlannerCore {
         let Some(e) = self.problem.evaluate(&rest) else {
             return Some(TriggerKind::EdgeLost);
         };
+        // Heading for the goal by the quickest path: only a lost edge matters.
+        if self.operator.abort {
+            return None;
+        }
         if !e.feasible {
             return Some(TriggerKind::Infeasible);
         }
@@ -935,6 +1182,138 @@ mod tests {
         cut.edges.clear();
         c.on_snapshot(&snapshot(&cut, 1), mono_now_ns(), &mut sink);
         assert!(!c.has_pending(), "a network change at the goal needs no plan");
+    }
+
+    fn command(id: u64, kind: CommandKind, value_s: f64, node: u32) -> OperatorCommand {
+        let mut c = *boxed_zeroed::<OperatorCommand>();
+        c.header.seq = id;
+        c.command_id = id;
+        c.kind = kind as u32;
+        c.value_s = value_s;
+        c.node = node;
+        c
+    }
+
+    #[test]
+    fn commands_are_refused_with_a_reason_before_the_mission_and_when_out_of_range() {
+        let inst = random_instance(20, 0.35, 20_000.0, 7);
+        let mut c = core();
+        let mut log = Vec::new();
+        let r = c.on_command(&command(1, CommandKind::AbortToGoal, 0.0, 0), mono_now_ns(), &mut |e| {
+            log.push(*e)
+        });
+        assert_eq!(r.map(|r| r.reason), Some(RefuseReason::NotRunning as u32));
+        let (mut c, first) = core_with_first_plan(&inst);
+        let mut sink = |_: &ServiceEvent| {};
+        let goal = inst.goal as u32;
+        let off_plan = (1..inst.nodes.len() as u32 - 1)
+            .find(|n| !first.route.iter().any(|id| id as u32 == *n))
+            .unwrap();
+        for (cmd, why) in [
+            (
+                command(2, CommandKind::SetTimeBudget, 1e9, 0),
+                RefuseReason::BudgetOutOfRange,
+            ),
+            (
+                command(3, CommandKind::SetTimeBudget, 0.5, 0),
+                RefuseReason::BudgetOutOfRange,
+            ),
+            (
+                command(4, CommandKind::RemoveTask, 0.0, goal),
+                RefuseReason::BadWaypoint,
+            ),
+            (command(5, CommandKind::RemoveTask, 0.0, 0), RefuseReason::BadWaypoint),
+            (command(6, CommandKind::RemoveTask, 0.0, 99), RefuseReason::BadWaypoint),
+            (command(7, CommandKind::AddTask, 0.0, off_plan), RefuseReason::NoChange),
+            (
+                OperatorCommand {
+                    kind: 99,
+                    ..command(8, CommandKind::AbortToGoal, 0.0, 0)
+                },
+                RefuseReason::Malformed,
+            ),
+        ] {
+            let r = c.on_command(&cmd, mono_now_ns(), &mut sink).expect("an answer now");
+            assert_eq!((r.status, r.reason), (AckStatus::Refused as u32, why as u32), "{cmd:?}");
+            assert!(!c.has_pending(), "a refused command changes nothing");
+        }
+        assert!(log.iter().all(|e| matches!(
+            e,
+            ServiceEvent::Command {
+                status: AckStatus::Refused,
+                ..
+            }
+        )));
+    }
+
+    #[test]
+    fn an_applied_command_replans_is_acked_with_its_plan_and_a_repeat_is_not_applied_again() {
+        let inst = random_instance(20, 0.35, 20_000.0, 7);
+        let (mut c, first) = core_with_first_plan(&inst);
+        let mut log = Vec::new();
+        let off = first.route.get(2) as u32;
+        let cmd = command(11, CommandKind::RemoveTask, 0.0, off);
+        assert_eq!(
+            c.on_command(&cmd, mono_now_ns(), &mut |e| log.push(*e)),
+            None,
+            "the ack waits for the plan"
+        );
+        assert!(c.has_pending() && c.has_pending_acks());
+        // The same id while its plan is being made: still one command.
+        assert_eq!(c.on_command(&cmd, mono_now_ns(), &mut |e| log.push(*e)), None);
+        let r = c.replan().unwrap().unwrap();
+        assert_eq!(r.trigger, TriggerKind::Operator);
+        assert!(
+            r.route.iter().all(|id| id as u32 != off),
+            "{:?} passes the removed {off}",
+            r.route
+        );
+        let mut acks = Vec::new();
+        c.take_acks(77, r.replan, &mut |a| acks.push(*a));
+        assert_eq!(acks.len(), 1);
+        assert_eq!(
+            (acks[0].id, acks[0].plan_seq, acks[0].status),
+            (11, 77, AckStatus::Applied as u32)
+        );
+        assert!(!c.has_pending_acks());
+        // After a reconnect the console sends it again: the same answer, nothing re-planned.
+        let again = c
+            .on_command(&cmd, mono_now_ns(), &mut |e| log.push(*e))
+            .expect("answered at once");
+        assert_eq!(again, acks[0]);
+        assert!(!c.has_pending());
+        let repeats = log
+            .iter()
+            .filter(|e| matches!(e, ServiceEvent::Command { repeat: true, .. }))
+            .count();
+        assert_eq!(repeats, 2);
+    }
+
+    #[test]
+    fn abort_plans_the_quickest_path_and_a_budget_caps_the_plans() {
+        let inst = random_instance(20, 0.35, 20_000.0, 7);
+        let (mut c, _) = core_with_first_plan(&inst);
+        let mut sink = |_: &ServiceEvent| {};
+        assert_eq!(
+            c.on_command(
+                &command(21, CommandKind::SetTimeBudget, 12_000.0, 0),
+                mono_now_ns(),
+                &mut sink
+            ),
+            None
+        );
+        let r = c.replan().unwrap().unwrap();
+        // The vehicle has used 11 000 s of 31 000: 1 000 s are left of 12 000.
+        assert!(r.budget_s <= 12_000.0 - 11_000.0, "{}", r.budget_s);
+        assert_eq!(
+            c.on_command(&command(22, CommandKind::AbortToGoal, 0.0, 0), mono_now_ns(), &mut sink),
+            None
+        );
+        let r = c.replan().unwrap().unwrap();
+        assert_eq!(r.route.last(), Some(inst.goal));
+        assert!(r.budget_s < 0.01, "{}", r.budget_s);
+        let again = c.on_command(&command(23, CommandKind::AbortToGoal, 0.0, 0), mono_now_ns(), &mut sink);
+        assert_eq!(again.map(|a| a.reason), Some(RefuseReason::NoChange as u32));
     }
 
     #[test]

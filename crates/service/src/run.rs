@@ -11,9 +11,11 @@
 use core::time::Duration;
 
 use super::alloc;
-use super::core::{PlannerCore, ServiceEvent};
+use super::core::{AckRecord, PlannerCore, ServiceEvent};
 use super::plan_out::PlanOutbox;
-use auv_messages::msg::{Plan, PlannerStatus, RejectCounters, VehicleState, WaypointSnapshot};
+use auv_messages::msg::{
+    CommandAck, OperatorCommand, Plan, PlannerStatus, RejectCounters, VehicleState, WaypointSnapshot,
+};
 use auv_platform::clock::mono_now_ns;
 use auv_transport::guard::Guarded;
 use auv_transport::{Inbox, Outbox, TransportError, Wake, Waker};
@@ -25,13 +27,15 @@ pub const IDLE_WAIT: Duration = Duration::from_millis(50);
 pub const HEARTBEAT: Duration = Duration::from_millis(250);
 
 /// The planner's ports.
-pub struct PlannerPorts<W, IS, IW, OP, OS>
+pub struct PlannerPorts<W, IS, IW, OP, OS, IC, OA>
 where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
     OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
+    IC: Inbox<OperatorCommand>,
+    OA: Outbox<CommandAck>,
 {
     /// Wakes on vehicle states and snapshots.
     pub waker: W,
@@ -43,6 +47,10 @@ where
     pub plans: OP,
     /// Status out.
     pub status: OS,
+    /// Operator commands (from the shore link), validated.
+    pub commands: Guarded<OperatorCommand, IC>,
+    /// Command acks out.
+    pub acks: OA,
 }
 
 /// Why the loop returned.
@@ -56,19 +64,34 @@ pub enum ExitReason {
     Stopped,
 }
 
-impl<W, IS, IW, OP, OS> PlannerPorts<W, IS, IW, OP, OS>
+impl<W, IS, IW, OP, OS, IC, OA> PlannerPorts<W, IS, IW, OP, OS, IC, OA>
 where
     W: Waker,
     IS: Inbox<VehicleState>,
     IW: Inbox<WaypointSnapshot>,
     OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
+    IC: Inbox<OperatorCommand>,
+    OA: Outbox<CommandAck>,
 {
-    /// Rejected input so far, both topics.
+    /// Rejected input so far, every input topic.
     pub fn rejected(&self) -> RejectCounters {
         let mut r = *self.states.rejected();
         r.merge(self.snapshots.rejected());
+        r.merge(self.commands.rejected());
         r
+    }
+
+    fn publish_acks(&mut self, core: &mut PlannerCore, plan_seq: u64, replan: u32) -> Result<(), TransportError> {
+        let acks = &mut self.acks;
+        let mut result = Ok(());
+        let t = core.mission_time_s();
+        core.take_acks(plan_seq, replan, &mut |r: &AckRecord| {
+            if result.is_ok() {
+                result = acks.publish(&mut |m: &mut CommandAck| r.fill(t, m)).map(|_| ());
+            }
+        });
+        result
     }
 
     fn publish_status(&mut self, core: &PlannerCore) -> Result<(), TransportError> {
@@ -81,9 +104,9 @@ where
 
 /// Runs the service until the mission ends, a signal arrives, or
 /// `keep_going` returns false (checked once per wake-up).
-pub fn run_service<W, IS, IW, OP, OS>(
+pub fn run_service<W, IS, IW, OP, OS, IC, OA>(
     core: &mut PlannerCore,
-    ports: &mut PlannerPorts<W, IS, IW, OP, OS>,
+    ports: &mut PlannerPorts<W, IS, IW, OP, OS, IC, OA>,
     events: &mut dyn FnMut(&ServiceEvent),
     keep_going: &mut dyn FnMut(&PlannerCore) -> bool,
 ) -> Result<ExitReason, TransportError>
@@ -93,6 +116,8 @@ where
     IW: Inbox<WaypointSnapshot>,
     OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
+    IC: Inbox<OperatorCommand>,
+    OA: Outbox<CommandAck>,
 {
     let warmup = core.config().warmup_plans;
     if warmup == 0 {
@@ -103,9 +128,9 @@ where
     exit
 }
 
-fn service_loop<W, IS, IW, OP, OS>(
+fn service_loop<W, IS, IW, OP, OS, IC, OA>(
     core: &mut PlannerCore,
-    ports: &mut PlannerPorts<W, IS, IW, OP, OS>,
+    ports: &mut PlannerPorts<W, IS, IW, OP, OS, IC, OA>,
     events: &mut dyn FnMut(&ServiceEvent),
     keep_going: &mut dyn FnMut(&PlannerCore) -> bool,
     warmup: u64,
@@ -116,6 +141,8 @@ where
     IW: Inbox<WaypointSnapshot>,
     OP: PlanOutbox,
     OS: Outbox<PlannerStatus>,
+    IC: Inbox<OperatorCommand>,
+    OA: Outbox<CommandAck>,
 {
     let mut last_status_ns = 0u64;
     let mut arm_steady = false;
@@ -136,25 +163,46 @@ where
         handled += ports
             .snapshots
             .drain(&mut |s| core.on_snapshot(s, received_ns, events))?;
+        // Commands after the inputs they are checked against.
+        let acks = &mut ports.acks;
+        let mut ack_result = Ok(0);
+        handled += ports.commands.drain(&mut |c| {
+            if let Some(r) = core.on_command(c, received_ns, events)
+                && ack_result.is_ok()
+            {
+                let t = core.mission_time_s();
+                ack_result = acks.publish(&mut |m: &mut CommandAck| r.fill(t, m));
+            }
+        })?;
+        ack_result?;
         if core.finished() {
             // The peers leave now; their disconnection is tear-down, not
             // steady state (a notifier reallocates its listener list).
             alloc::end_steady_state();
+            ports.publish_acks(core, 0, 0)?;
             ports.publish_status(core)?;
             return Ok(ExitReason::Finished);
         }
         if let Some(result) = core.replan() {
             handled += 1;
-            if let Ok(r) = result {
-                ports
-                    .plans
-                    .publish_plan(core.plan_context(), &mut |m: &mut Plan| core.fill_plan(&r, m))?;
-                core.published(&r, mono_now_ns(), events);
-                // Warm-up ends after the status that follows this plan: the
-                // first send of each port connects it to its consumers
-                // (iceoryx2 opens a notifier's listener connections lazily,
-                // which allocates).
-                arm_steady |= core.counters().plans == warmup;
+            match result {
+                Ok(r) => {
+                    let plan_seq = ports
+                        .plans
+                        .publish_plan(core.plan_context(), &mut |m: &mut Plan| core.fill_plan(&r, m))?;
+                    core.published(&r, mono_now_ns(), events);
+                    if core.has_pending_acks() {
+                        ports.publish_acks(core, plan_seq, r.replan)?;
+                    }
+                    // Warm-up ends after the status that follows this plan: the
+                    // first send of each port connects it to its consumers
+                    // (iceoryx2 opens a notifier's listener connections lazily,
+                    // which allocates).
+                    arm_steady |= core.counters().plans == warmup;
+                }
+                // No route to the goal: the commands are answered without a plan.
+                Err(_) if core.has_pending_acks() => ports.publish_acks(core, 0, 0)?,
+                Err(_) => {}
             }
         }
         let now = mono_now_ns();
@@ -191,6 +239,8 @@ mod tests {
             snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>().unwrap(), fp, "planner"),
             plans: ctx.outbox::<Plan>(Stamp::new(fp)).unwrap(),
             status: ctx.outbox::<PlannerStatus>(Stamp::new(fp)).unwrap(),
+            commands: Guarded::new(ctx.inbox::<OperatorCommand>().unwrap(), fp, "planner"),
+            acks: ctx.outbox::<CommandAck>(Stamp::new(fp)).unwrap(),
         };
         // The peers: a sensor, a vehicle, and one foreign sender.
         let mut snap_out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();

@@ -22,9 +22,9 @@ use serde_json::{Value, json};
 use crate::{OnTopic, Role, Topic};
 use auv_core::problem::MAX_NODES;
 use auv_messages::msg::{
-    AllocCounters, Header, MAX_EDGES, NO_NODE, ObjectiveCode, Outcome, Plan, PlannerPhase, PlannerStatus, REJECT_KINDS,
-    RejectKind, TriggerKind, VehicleEvent, VehicleMode, VehicleState, WIRE_VERSION, WaypointSnapshot, WireEdge,
-    WireNode,
+    AckStatus, AllocCounters, CommandAck, CommandKind, Header, MAX_EDGES, NO_NODE, ObjectiveCode, OperatorCommand,
+    Outcome, Plan, PlannerPhase, PlannerStatus, REJECT_KINDS, RefuseReason, RejectKind, TriggerKind, VehicleEvent,
+    VehicleMode, VehicleState, WIRE_VERSION, WaypointSnapshot, WireEdge, WireNode,
 };
 
 /// A type as it appears in a field.
@@ -165,7 +165,7 @@ pub fn structs() -> Vec<StructLayout> {
     ]
 }
 
-/// The messages of the four mission topics (the latency bench's raw
+/// The messages of the six mission topics (the latency bench's raw
 /// ping/pong are internal and not listed).
 pub fn messages() -> Vec<StructLayout> {
     vec![
@@ -276,6 +276,16 @@ pub fn messages() -> Vec<StructLayout> {
                 _pad,
             ]
         ),
+        layout!(
+            OperatorCommand,
+            type_name_of::<OperatorCommand>(),
+            [header, command_id, value_s, kind, node]
+        ),
+        layout!(
+            CommandAck,
+            type_name_of::<CommandAck>(),
+            [header, command_id, plan_seq, kind, status, reason, replan]
+        ),
     ]
 }
 
@@ -359,7 +369,11 @@ pub fn wire_layout_json() -> Value {
                 (TriggerKind::Initial, "initial"), (TriggerKind::Arrival, "arrival"),
                 (TriggerKind::EdgeLost, "edge_lost"), (TriggerKind::TimeChanged, "time_changed"),
                 (TriggerKind::Infeasible, "infeasible"), (TriggerKind::SensorBack, "sensor_back"),
+                (TriggerKind::Operator, "operator"),
             ], |v| v as u32),
+            "CommandKind": Value::Object(CommandKind::ALL.iter().map(|&k| (k.as_str().replace('-', "_"), json!(k as u32))).collect()),
+            "AckStatus": codes(&[(AckStatus::Applied, "applied"), (AckStatus::Refused, "refused")], |v| v as u32),
+            "RefuseReason": Value::Object(RefuseReason::ALL.iter().map(|&k| (k.as_str().to_string(), json!(k as u32))).collect()),
             "PlannerPhase": codes(&[
                 (PlannerPhase::Waiting, "waiting"), (PlannerPhase::Running, "running"),
                 (PlannerPhase::Finished, "finished"),
@@ -371,6 +385,8 @@ pub fn wire_layout_json() -> Value {
             topic_json::<VehicleState>(),
             topic_json::<Plan>(),
             topic_json::<PlannerStatus>(),
+            topic_json::<OperatorCommand>(),
+            topic_json::<CommandAck>(),
         ],
         "wake": {
             "service": "auv/<vehicle>/<role>/wake/v1",
@@ -384,7 +400,14 @@ pub fn wire_layout_json() -> Value {
 }
 
 /// The topics a layout is printed for, in the JSON's order.
-pub const TOPICS: [Topic; 4] = [Topic::Waypoints, Topic::VehicleState, Topic::Plan, Topic::Status];
+pub const TOPICS: [Topic; 6] = [
+    Topic::Waypoints,
+    Topic::VehicleState,
+    Topic::Plan,
+    Topic::Status,
+    Topic::Command,
+    Topic::Ack,
+];
 
 #[cfg(test)]
 mod tests {
@@ -451,7 +474,9 @@ mod tests {
                 "auv.WaypointSnapshot.v1",
                 "auv.VehicleState.v2",
                 "auv.Plan.v2",
-                "auv.PlannerStatus.v4"
+                "auv.PlannerStatus.v4",
+                "auv.OperatorCommand.v1",
+                "auv.CommandAck.v1"
             ]
         );
         assert!(structs().iter().all(|s| s.type_name.is_none()));

@@ -20,6 +20,8 @@
 //! | vehicle state | `auv/<vehicle>/vehicle/state/v2` | vehicle → planner, sensor |
 //! | plan | `auv/<vehicle>/planner/plan/v2` | planner → vehicle |
 //! | planner status | `auv/<vehicle>/planner/status/v4` | planner → vehicle |
+//! | operator command | `auv/<vehicle>/operator/command/v1` | shore link → planner |
+//! | command ack | `auv/<vehicle>/planner/ack/v1` | planner → shore link |
 //!
 //! Wake services: `auv/<vehicle>/<role>/wake/v1`.
 
@@ -32,7 +34,9 @@ pub mod layout;
 
 use core::time::Duration;
 
-use auv_messages::msg::{Message, Plan, PlannerStatus, RawPing, RawPong, VehicleState, WaypointSnapshot};
+use auv_messages::msg::{
+    CommandAck, Message, OperatorCommand, Plan, PlannerStatus, RawPing, RawPong, VehicleState, WaypointSnapshot,
+};
 
 /// One kind of message flow. Each message type travels on exactly one topic.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -45,6 +49,10 @@ pub enum Topic {
     Plan,
     /// [`PlannerStatus`].
     Status,
+    /// [`OperatorCommand`] (from the shore link).
+    Command,
+    /// [`CommandAck`] (to the shore link).
+    Ack,
     /// Raw ping of the latency bench ([`RawPing`]).
     BenchPing,
     /// Raw pong of the latency bench ([`RawPong`]).
@@ -59,6 +67,8 @@ impl Topic {
             Self::VehicleState => "vehicle/state/v2",
             Self::Plan => "planner/plan/v2",
             Self::Status => "planner/status/v4",
+            Self::Command => "operator/command/v1",
+            Self::Ack => "planner/ack/v1",
             Self::BenchPing => "bench/ping/v1",
             Self::BenchPong => "bench/pong/v1",
         }
@@ -73,6 +83,8 @@ impl Topic {
             Self::Status => 4,
             Self::BenchPing => 5,
             Self::BenchPong => 6,
+            Self::Command => 7,
+            Self::Ack => 8,
         }
     }
 
@@ -83,6 +95,9 @@ impl Topic {
             Self::VehicleState => &[Role::Planner, Role::Sensor],
             Self::Plan => &[Role::Vehicle],
             Self::Status => &[Role::Vehicle],
+            Self::Command => &[Role::Planner],
+            // The shore link polls its acks: it wakes no role.
+            Self::Ack => &[],
             Self::BenchPing => &[Role::Planner],
             Self::BenchPong => &[Role::Vehicle],
         }
@@ -96,7 +111,9 @@ impl Topic {
     /// time after a solve, measured with probes in iceoryx2's `send_sample`).
     pub fn history_size(self) -> usize {
         match self {
-            Self::Plan => 0,
+            // A command is applied once: a restarted planner must not be
+            // handed the last one again (the link resends until acked).
+            Self::Plan | Self::Command | Self::Ack => 0,
             _ => 1,
         }
     }
@@ -109,6 +126,8 @@ impl Topic {
     pub fn subscriber_buffer(self) -> usize {
         match self {
             Self::Plan => 64,
+            // Commands and acks are few, and each one matters.
+            Self::Command | Self::Ack => 16,
             _ => 2,
         }
     }
@@ -164,6 +183,12 @@ impl OnTopic for Plan {
 }
 impl OnTopic for PlannerStatus {
     const TOPIC: Topic = Topic::Status;
+}
+impl OnTopic for OperatorCommand {
+    const TOPIC: Topic = Topic::Command;
+}
+impl OnTopic for CommandAck {
+    const TOPIC: Topic = Topic::Ack;
 }
 impl OnTopic for RawPing {
     const TOPIC: Topic = Topic::BenchPing;

@@ -22,6 +22,14 @@ pub enum IpcCommand {
     Serve(ServeArgs),
     /// Measure trigger → plan latency across processes next to a raw iceoryx2 ping-pong.
     BenchLatency(BenchArgs),
+    /// The onboard end of the shore link: the vehicle's topics on Zenoh,
+    /// operator commands to the planner (`mission --shore` starts it).
+    #[cfg(feature = "shore")]
+    Link(crate::shore::link::LinkArgs),
+    /// The operator's console: watch a vehicle over its shore link, record
+    /// it, send a command.
+    #[cfg(feature = "shore")]
+    Shore(crate::shore::console::ShoreArgs),
     /// (Used by bench-latency) answer raw pings.
     #[command(hide = true)]
     BenchEcho(EchoArgs),
@@ -35,5 +43,9 @@ pub fn run(cmd: &IpcCommand) -> ExitCode {
         IpcCommand::Soak(a) => run_soak(a),
         IpcCommand::BenchLatency(a) => run_bench(a),
         IpcCommand::BenchEcho(a) => run_echo(a),
+        #[cfg(feature = "shore")]
+        IpcCommand::Link(a) => crate::shore::link::run_link(a),
+        #[cfg(feature = "shore")]
+        IpcCommand::Shore(a) => crate::shore::console::run_shore(a),
     }
 }

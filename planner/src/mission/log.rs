@@ -7,7 +7,7 @@
 
 use serde_json::{Value, json};
 
-use auv_messages::msg::{TriggerKind, outcome_name};
+use auv_messages::msg::{AckStatus, TriggerKind, outcome_name};
 use auv_service::core::ServiceEvent;
 
 /// snake_case name of a trigger.
@@ -19,6 +19,7 @@ pub fn trigger_name(k: TriggerKind) -> &'static str {
         TriggerKind::TimeChanged => "time_changed",
         TriggerKind::Infeasible => "infeasible",
         TriggerKind::SensorBack => "sensor_back",
+        TriggerKind::Operator => "operator",
     }
 }
 
@@ -85,6 +86,24 @@ pub fn lines(e: &ServiceEvent) -> Vec<Value> {
                 "deadline_cut": deadline_cut,
             }),
         ],
+        ServiceEvent::Command {
+            t,
+            id,
+            kind,
+            status,
+            reason,
+            value,
+            repeat,
+        } => vec![json!({
+            "event": "command",
+            "t": t,
+            "id": id,
+            "command": kind.as_str(),
+            "status": if status == AckStatus::Applied { "applied" } else { "refused" },
+            "reason": reason.as_str(),
+            "value": value,
+            "repeat": repeat,
+        })],
         ServiceEvent::Finished { t, outcome } => vec![json!({
             "event": "finished",
             "t": t,

@@ -281,25 +281,43 @@ const SCENE_PROPS: &[(&str, &str)] = &[("deletions", "array"), ("entities", "arr
 /// The top-level properties of `foxglove.GeoJSON`.
 const GEOJSON_PROPS: &[(&str, &str)] = &[("geojson", "string")];
 
-/// The channels of a mission file.
+/// The channels of a mission file (`shore.mcap` uses the same ones).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-enum Topic {
+pub enum Topic {
+    /// `chart`: the water mask (`foxglove.Grid`).
     Chart,
+    /// `waypoints/bounds`: the drift bounds (`foxglove.SceneUpdate`).
     Bounds,
+    /// `waypoints`: the waypoints as reported (`foxglove.SceneUpdate`).
     Waypoints,
+    /// `planner/plan`: each plan (`foxglove.SceneUpdate`).
     Plan,
+    /// `vehicle/pose`: the vehicle (`foxglove.PoseInFrame`).
     Pose,
+    /// `vehicle/track`: the route travelled (`foxglove.SceneUpdate`).
     Track,
+    /// `events`: log lines (`foxglove.Log`).
     Events,
+    /// `planner/status`: each plan's figures ([`STATUS_SCHEMA`]).
     Status,
+    /// `mission/progress`: each arrival ([`PROGRESS_SCHEMA`]).
     Progress,
+    /// `planner/latency`: the latency summary ([`LATENCY_SCHEMA`]).
     Latency,
+    /// `vehicle/fix`: lat/lon of the vehicle (`foxglove.LocationFix`).
     Fix,
+    /// `vehicle/route_geojson`: the route travelled (`foxglove.GeoJSON`).
     Route,
+    /// `chart/geojson`: land and waypoints (`foxglove.GeoJSON`).
     ChartGeo,
 }
 
 impl Topic {
+    /// The channel name below `/<vehicle>/`.
+    pub fn name(self) -> &'static str {
+        self.spec().0
+    }
+
     /// Topic name (after `/<vehicle>/`), schema name, and the schema's
     /// top-level properties.
     fn spec(self) -> (&'static str, &'static str, &'static [(&'static str, &'static str)]) {
@@ -465,6 +483,85 @@ fn pose_json(p: Vec3, yaw: f64) -> Value {
     json!({"position": point(p), "orientation": {"x": 0.0, "y": 0.0, "z": s, "w": c}})
 }
 
+/// A [`Topic::Pose`] message: the vehicle at `p` heading `yaw` (rad from east).
+pub fn pose_message(t_ns: u64, p: Vec3, yaw: f64) -> Value {
+    json!({"timestamp": stamp(t_ns), "frame_id": FRAME, "pose": pose_json(p, yaw)})
+}
+
+/// A [`Topic::Plan`] message: plan `replan` through `pts` (a mission's first
+/// plan blue, later ones purple).
+pub fn plan_message(t_ns: u64, replan: u64, route: &[usize], pts: &[Vec3], first: bool) -> Value {
+    let ids = route.iter().map(usize::to_string).collect::<Vec<_>>().join(" ");
+    let meta = [("replan", replan.to_string()), ("route", ids)];
+    let c = if first {
+        colour(0.2, 0.3, 0.9, 1.0)
+    } else {
+        colour(0.6, 0.1, 0.7, 1.0)
+    };
+    scene(vec![lines_entity(t_ns, "plan", &meta, line_json(pts, c))])
+}
+
+/// The figures of one plan on [`Topic::Status`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanFigures {
+    /// Mission time of its trigger, s.
+    pub t: f64,
+    /// Re-plan counter.
+    pub replan: u64,
+    /// Trigger name.
+    pub trigger: String,
+    /// Budget planned for, s.
+    pub budget_s: f64,
+    /// Waypoints in the route.
+    pub route_len: usize,
+    /// Predicted time, s.
+    pub time_s: f64,
+    /// Predicted weight.
+    pub weight: f64,
+    /// Predicted distance, m.
+    pub distance_m: f64,
+    /// Fits the budget.
+    pub feasible: bool,
+    /// Solver iterations.
+    pub iterations: u64,
+    /// Cut by the deadline.
+    pub deadline_cut: bool,
+    /// Snapshot epoch.
+    pub epoch: u64,
+}
+
+impl PlanFigures {
+    /// The [`Topic::Status`] message.
+    pub fn message(&self) -> Value {
+        json!({
+            "t": self.t, "replan": self.replan, "trigger": self.trigger, "budget_s": self.budget_s,
+            "route_len": self.route_len, "time_s": self.time_s,
+            "weight": self.weight, "distance_m": self.distance_m,
+            "feasible": self.feasible, "iterations": self.iterations,
+            "deadline_cut": self.deadline_cut, "epoch": self.epoch,
+        })
+    }
+}
+
+/// A [`Topic::Progress`] message: an arrival.
+pub fn progress_message(t: f64, node: u64, tasks: u64, weight: f64, time_left_s: f64) -> Value {
+    json!({"t": t, "node": node, "tasks": tasks, "weight": weight, "time_left_s": time_left_s})
+}
+
+/// A [`Topic::Events`] message: line `line` of `file` from `name`
+/// (`foxglove.Log` levels: 2 info, 3 warning, 4 error).
+pub fn log_message(t_ns: u64, level: u8, text: &str, name: &str, file: &str, line: usize) -> Value {
+    json!({
+        "timestamp": stamp(t_ns), "level": level, "message": text,
+        "name": name, "file": file, "line": line,
+    })
+}
+
+/// Mission time, s, as MCAP log time, ns.
+pub fn log_time_ns(t: f64) -> u64 {
+    ns(t)
+}
+
 fn field<'v>(v: &'v Value, key: &str, line: usize) -> Result<&'v Value, McapLogError> {
     v.get(key).ok_or_else(|| McapLogError::BadLogLine {
         line,
@@ -554,11 +651,7 @@ impl PoseStream<'_> {
             let t_ns = ns(p.t);
             self.end = self.end.max(t_ns);
             self.next += 1;
-            sink.put(
-                t_ns,
-                Topic::Pose,
-                &json!({"timestamp": stamp(t_ns), "frame_id": FRAME, "pose": pose_json(p.p, p.yaw)}),
-            )?;
+            sink.put(t_ns, Topic::Pose, &pose_message(t_ns, p.p, p.yaw))?;
             self.travelled.push(p.p);
             let travelled = lines_entity(
                 t_ns,
@@ -632,10 +725,7 @@ fn emit(rec: &MissionRecord, log: impl BufRead, sink: &mut impl Sink) -> Result<
         sink.put(
             t_ns,
             Topic::Events,
-            &json!({
-                "timestamp": stamp(t_ns), "level": level(&v), "message": text,
-                "name": "planner", "file": "mission.log", "line": line,
-            }),
+            &log_message(t_ns, level(&v), &text, "planner", "mission.log", line),
         )?;
         match field(&v, "event", line)?.as_str() {
             Some("sensor_update") => {
@@ -668,39 +758,38 @@ fn emit(rec: &MissionRecord, log: impl BufRead, sink: &mut impl Sink) -> Result<
                     });
                 }
                 let replan = num(&v, "replan", line)? as u64;
-                let ids = route.iter().map(usize::to_string).collect::<Vec<_>>().join(" ");
-                let meta = [("replan", replan.to_string()), ("route", ids)];
                 let pts: Vec<Vec3> = route.iter().map(|&n| pos[n]).collect();
-                let colour_of_plan = if plans == 0 {
-                    colour(0.2, 0.3, 0.9, 1.0)
-                } else {
-                    colour(0.6, 0.1, 0.7, 1.0)
-                };
-                let plan = lines_entity(t_ns, "plan", &meta, line_json(&pts, colour_of_plan));
-                sink.put(t_ns, Topic::Plan, &scene(vec![plan]))?;
+                sink.put(t_ns, Topic::Plan, &plan_message(t_ns, replan, &route, &pts, plans == 0))?;
                 let (trigger, budget_s) = pending_trigger.take().unwrap_or_default();
-                sink.put(
-                    t_ns,
-                    Topic::Status,
-                    &json!({
-                        "t": t, "replan": replan, "trigger": trigger, "budget_s": budget_s,
-                        "route_len": route.len(), "time_s": num(&v, "time_s", line)?,
-                        "weight": num(&v, "weight", line)?, "distance_m": num(&v, "distance_m", line)?,
-                        "feasible": v["feasible"] == true, "iterations": num(&v, "iterations", line)? as u64,
-                        "deadline_cut": v["deadline_cut"] == true, "epoch": epoch,
-                    }),
-                )?;
+                let figures = PlanFigures {
+                    t,
+                    replan,
+                    trigger,
+                    budget_s,
+                    route_len: route.len(),
+                    time_s: num(&v, "time_s", line)?,
+                    weight: num(&v, "weight", line)?,
+                    distance_m: num(&v, "distance_m", line)?,
+                    feasible: v["feasible"] == true,
+                    iterations: num(&v, "iterations", line)? as u64,
+                    deadline_cut: v["deadline_cut"] == true,
+                    epoch,
+                };
+                sink.put(t_ns, Topic::Status, &figures.message())?;
                 plans += 1;
             }
             Some("arrival") => sink.put(
                 t_ns,
                 Topic::Progress,
-                &json!({
-                    "t": t, "node": num(&v, "node", line)? as u64, "tasks": num(&v, "tasks", line)? as u64,
-                    "weight": num(&v, "weight", line)?, "time_left_s": num(&v, "time_left_s", line)?,
-                }),
+                &progress_message(
+                    t,
+                    num(&v, "node", line)? as u64,
+                    num(&v, "tasks", line)? as u64,
+                    num(&v, "weight", line)?,
+                    num(&v, "time_left_s", line)?,
+                ),
             )?,
-            Some("finished") => {}
+            Some("finished" | "command") => {}
             other => {
                 return Err(McapLogError::BadLogLine {
                     line,
@@ -724,26 +813,41 @@ fn line_json(pts: &[Vec3], c: Value) -> Value {
     line(0, pts.iter().copied(), 3.0, c)
 }
 
-/// Writes each message to an MCAP file as it comes: a channel is declared
-/// when its first message arrives, nothing of the run is held but the
-/// writer's current chunk.
-struct McapSink<'v, W: Write + Seek> {
+/// Writes JSON messages to MCAP channels `/<vehicle>/<topic>` as they come:
+/// a channel is declared with its schema when its first message arrives (or
+/// up front), nothing of the run is held but the writer's current chunk.
+pub struct ChannelWriter<W: Write + Seek> {
     writer: mcap::Writer<W>,
-    vehicle: &'v str,
+    vehicle: String,
     /// Channel id and last sequence number, by topic.
     channels: BTreeMap<Topic, (u16, u32)>,
     buf: Vec<u8>,
 }
 
-impl<W: Write + Seek> Sink for McapSink<'_, W> {
-    fn put(&mut self, t_ns: u64, topic: Topic, data: &Value) -> Result<(), McapLogError> {
+impl<W: Write + Seek> ChannelWriter<W> {
+    /// A writer on `w` with `topics` declared now, in that order (the rest
+    /// when first written).
+    pub fn new(w: W, vehicle: &str, topics: &[Topic]) -> Result<Self, McapLogError> {
+        let mut cw = Self {
+            writer: mcap::WriteOptions::new().compression(None).profile("").create(w)?,
+            vehicle: vehicle.to_string(),
+            channels: BTreeMap::new(),
+            buf: Vec::new(),
+        };
+        for &t in topics {
+            cw.channel(t)?;
+        }
+        Ok(cw)
+    }
+
+    fn channel(&mut self, topic: Topic) -> Result<&mut (u16, u32), McapLogError> {
         let Self {
             writer,
             vehicle,
             channels,
-            buf,
+            ..
         } = self;
-        let (channel_id, seq) = match channels.entry(topic) {
+        Ok(match channels.entry(topic) {
             std::collections::btree_map::Entry::Occupied(o) => o.into_mut(),
             std::collections::btree_map::Entry::Vacant(v) => {
                 let (name, schema_name, props) = topic.spec();
@@ -751,33 +855,44 @@ impl<W: Write + Seek> Sink for McapSink<'_, W> {
                 let id = writer.add_channel(schema_id, &format!("/{vehicle}/{name}"), "json", &BTreeMap::new())?;
                 v.insert((id, 0))
             }
-        };
-        *seq += 1;
-        buf.clear();
-        serde_json::to_writer(&mut *buf, data).map_err(|e| McapLogError::Io(e.into()))?;
+        })
+    }
+
+    /// Writes `data` on `topic` at log time `t_ns`.
+    pub fn write(&mut self, topic: Topic, t_ns: u64, data: &Value) -> Result<(), McapLogError> {
+        let (channel_id, seq) = *self.channel(topic)?;
+        self.channels.insert(topic, (channel_id, seq + 1));
+        self.buf.clear();
+        serde_json::to_writer(&mut self.buf, data).map_err(|e| McapLogError::Io(e.into()))?;
         let header = mcap::records::MessageHeader {
-            channel_id: *channel_id,
-            sequence: *seq,
+            channel_id,
+            sequence: seq + 1,
             log_time: t_ns,
             publish_time: t_ns,
         };
-        writer.write_to_known_channel(&header, buf)?;
+        self.writer.write_to_known_channel(&header, &self.buf)?;
         Ok(())
+    }
+
+    /// Writes the summary and returns the sink.
+    pub fn finish(mut self) -> Result<W, McapLogError> {
+        self.writer.finish()?;
+        Ok(self.writer.into_inner())
+    }
+}
+
+impl<W: Write + Seek> Sink for ChannelWriter<W> {
+    fn put(&mut self, t_ns: u64, topic: Topic, data: &Value) -> Result<(), McapLogError> {
+        self.write(topic, t_ns, data)
     }
 }
 
 /// Writes the mission's MCAP file to `w`, reading `log` (the
 /// `mission.log` text) line by line.
 pub fn write_to<W: Write + Seek>(rec: &MissionRecord, log: impl BufRead, w: W) -> Result<W, McapLogError> {
-    let mut sink = McapSink {
-        writer: mcap::WriteOptions::new().compression(None).profile("").create(w)?,
-        vehicle: rec.vehicle,
-        channels: BTreeMap::new(),
-        buf: Vec::new(),
-    };
-    emit(rec, log, &mut sink)?;
-    sink.writer.finish()?;
-    Ok(sink.writer.into_inner())
+    let mut writer = ChannelWriter::new(w, rec.vehicle, &[])?;
+    emit(rec, log, &mut writer)?;
+    writer.finish()
 }
 
 /// Writes `mission.mcap` at `path`, streaming: `log` (`mission.log`) is

@@ -12,6 +12,7 @@ pub mod report;
 pub mod restart;
 pub mod route_geojson;
 pub mod run;
+pub mod shore_report;
 pub mod soak;
 pub mod stale;
 pub mod supervise;

@@ -95,6 +95,14 @@ pub struct MissionArgs {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub external: ExternalArgs,
+    /// Listen for the shore on this Zenoh endpoint: `planner link` runs as a
+    /// supervised child that forwards the vehicle's topics and takes
+    /// operator commands (`planner shore --connect` on the other side).
+    #[arg(long, value_name = "tcp/ADDR:PORT")]
+    pub shore: Option<String>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub link: crate::shore::LinkOptions,
 }
 
 /// Why a mission failed.
@@ -359,11 +367,15 @@ pub(super) struct RunOut {
     pub(super) announced: Announced,
     /// Peak resident set size of each child (planner, sensor, vehicle), kB.
     pub(super) rss_kb: [u64; 3],
+    /// Restarts of the shore link's process (`None`: no `--shore`).
+    pub(super) link_restarts: Option<u64>,
 }
 
 /// How to start the simulators, where to write, and the mission's budget.
 pub(super) struct Launch<'a> {
     pub(super) out: &'a Path,
+    /// The domain's and the scenario's flags every child shares.
+    pub(super) common: &'a [String],
     pub(super) sensor_args: &'a [String],
     pub(super) vehicle_args: &'a [String],
     /// Mission time budget, s.
@@ -409,6 +421,15 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let vehicle_faults =
         FaultCycle::parse_opt("--inject-vehicle", a.inject_vehicle.as_deref(), &VEHICLE_FAULTS).map_err(usage)?;
     a.supervisor.policy().map_err(MissionError::Usage)?;
+    if let Some(ep) = &a.shore {
+        if !cfg!(feature = "shore") {
+            return Err(MissionError::Usage(
+                "--shore: this planner was built without the shore link (cargo feature `shore`)".into(),
+            ));
+        }
+        a.link.timeout().map_err(MissionError::Usage)?;
+        check_shore_endpoint(ep)?;
+    }
     let prefix = a.ipc_prefix.clone().unwrap_or_else(|| unique_prefix("m"));
     let opts = IpcOptions::new(Some(&prefix), &a.vehicle, WaitMode::Event)?;
     let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(world.seed()));
@@ -446,6 +467,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let budget = world.snapshot().time_available_s;
     let launch = Launch {
         out: &out,
+        common: &common,
         sensor_args: &sensor_args,
         vehicle_args: &vehicle_args,
         budget,
@@ -536,7 +558,13 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         rt_priority: run.totals.rt_priority,
     };
     let report_path = out.join("report.json");
-    let text = serde_json::to_string_pretty(&report.to_json()).unwrap_or_default();
+    let mut report_json = report.to_json();
+    if let Some(ep) = &a.shore {
+        let link =
+            super::shore_report::shore_link_json(&out, ep, a.link.link_timeout_ms, run.link_restarts.unwrap_or(0));
+        report_json["shore_link"] = link;
+    }
+    let text = serde_json::to_string_pretty(&report_json).unwrap_or_default();
     std::fs::write(&report_path, text + "\n").map_err(|e| io_err(&report_path, e))?;
     let geojson_path = out.join("route.geojson");
     let collection = super::route_geojson::route_geojson(&world, &trace.visits);
@@ -567,6 +595,13 @@ fn write_mcap(
     super::mcap_log::write(&path, &record, &out.join("mission.log")).map_err(|e| io_err(&path, e))
 }
 
+fn check_shore_endpoint(ep: &str) -> Result<(), MissionError> {
+    #[cfg(feature = "shore")]
+    auv_link::session::check_endpoint(ep).map_err(|e| MissionError::Usage(format!("--shore: {e}")))?;
+    let _ = ep;
+    Ok(())
+}
+
 fn signal_name(sig: i32) -> String {
     match sig {
         libc::SIGINT => "SIGINT".into(),
@@ -590,6 +625,11 @@ pub fn run_mission(a: &MissionArgs) -> ExitCode {
         Ok((report, out)) => {
             if !a.quiet {
                 println!("{}", report.summary());
+                if a.shore.is_some() {
+                    let written = std::fs::read_to_string(out.join("report.json")).unwrap_or_default();
+                    let v: serde_json::Value = serde_json::from_str(&written).unwrap_or_default();
+                    println!("{}", super::shore_report::summary_line(&v["shore_link"]));
+                }
                 println!(
                     "wrote {}/report.json, mission.log, mission.svg, mission.png, route.geojson, mission.mcap",
                     out.display()

@@ -198,12 +198,43 @@ struct Slot {
     kill_cause: Option<Cause>,
 }
 
+/// The shore link's process (`planner link`, with `--shore`): restarted
+/// whenever it fails, with a growing back-off and no budget, and never a
+/// reason to stop the mission: the vehicle does not depend on it.
+struct LinkSlot {
+    kid: Kid,
+    restart_at: Option<Instant>,
+    started_at: Instant,
+    backoff: Duration,
+    restarts: u64,
+}
+
+/// First wait before restarting the link, doubled per quick failure up to
+/// [`LINK_BACKOFF_MAX`] (our choice: the shore notices a loss within its
+/// timeout, 1 s by default; a restart well inside it keeps the gap short).
+const LINK_BACKOFF: Duration = Duration::from_millis(200);
+/// Longest the mission waits at start for the link's ports, before it
+/// starts the others anyway.
+const LINK_READY_WAIT: Duration = Duration::from_secs(3);
+
+/// `link_start` lines the link has written to its events file (one per start,
+/// once its onboard ports are open).
+fn count_link_starts(events: &Path) -> usize {
+    std::fs::read_to_string(events).map_or(0, |t| t.lines().filter(|l| l.contains("\"link_start\"")).count())
+}
+
+/// Longest wait before restarting the link.
+const LINK_BACKOFF_MAX: Duration = Duration::from_secs(5);
+
 /// Writes `<out>/pids.json`: this process and each child's pid (null while
 /// it is down), replaced atomically.
-fn write_pids(out: &Path, slots: &[Slot; 3]) {
+fn write_pids(out: &Path, slots: &[Slot; 3], link: Option<&LinkSlot>) {
     let mut v = json!({"supervisor": std::process::id()});
     for p in Proc::ALL {
         v[p.name()] = json!(slots[p as usize].kid.pid());
+    }
+    if let Some(l) = link {
+        v["link"] = json!(l.kid.pid());
     }
     let tmp = out.join("pids.json.tmp");
     if std::fs::write(&tmp, format!("{v}\n")).is_ok() {
@@ -284,10 +315,43 @@ pub(super) fn supervise(
         restart_at: None,
         kill_cause: None,
     });
+    let mut link = match &a.shore {
+        Some(endpoint) => {
+            let mut args = vec!["link".to_string()];
+            args.extend(l.common.iter().cloned());
+            args.extend(["--listen".into(), endpoint.clone()]);
+            args.extend(a.link.to_flags());
+            args.extend(["--log".into(), out.join("link.jsonl").display().to_string()]);
+            args.extend([
+                "--plan-history".into(),
+                out.join("link-plans.jsonl").display().to_string(),
+            ]);
+            let me = std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?;
+            let mut kid = Kid::new("link", me, &args, out).map_err(child)?;
+            let journal = out.join("link.jsonl");
+            let starts = count_link_starts(&journal);
+            kid.start(&[]).map_err(child)?;
+            // The link first, so that its subscribers exist before the
+            // planner's first plan (plans are not replayed); but only for a
+            // moment: the mission never waits on the link.
+            let t0 = Instant::now();
+            while count_link_starts(&journal) == starts && t0.elapsed() < LINK_READY_WAIT {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            Some(LinkSlot {
+                kid,
+                restart_at: None,
+                started_at: Instant::now(),
+                backoff: LINK_BACKOFF,
+                restarts: 0,
+            })
+        }
+        None => None,
+    };
     for s in &mut slots {
         s.kid.start(&[]).map_err(child)?;
     }
-    write_pids(out, &slots);
+    write_pids(out, &slots, link.as_ref());
     let fault_seed = a.fault_seed.unwrap_or(l.seed);
     let faults = plan_faults(fault_seed, a.faults, budget, &Proc::ALL);
     let mut report = FaultReport {
@@ -487,8 +551,41 @@ pub(super) fn supervise(
                 _ => {}
             }
         }
+        if let Some(lk) = &mut link {
+            let over = mission_over || stopping || signal::shutdown_requested();
+            if lk.restart_at.is_none() && lk.kid.poll() {
+                let status = lk.kid.exit_status();
+                lk.kid.clear_exit();
+                if !over && !status.is_some_and(|s| s.success()) {
+                    let st = status.map_or("unknown".to_string(), |s| s.to_string());
+                    if lk.started_at.elapsed() > Duration::from_secs(10) {
+                        lk.backoff = LINK_BACKOFF;
+                    }
+                    lk.restarts += 1;
+                    lk.restart_at = Some(now + lk.backoff);
+                    lk.backoff = (lk.backoff * 2).min(LINK_BACKOFF_MAX);
+                    eprintln!("planner: shore link exited ({st}); restarting it, the mission goes on");
+                    note(
+                        &mut flog,
+                        t,
+                        json!({"event": "exited", "process": "link", "status": st}),
+                    );
+                }
+            }
+            match lk.restart_at {
+                Some(_) if over => lk.restart_at = None,
+                Some(at) if now >= at => {
+                    lk.restart_at = None;
+                    lk.kid.start(&[]).map_err(child)?;
+                    lk.started_at = Instant::now();
+                    note(&mut flog, t, json!({"event": "restarted", "process": "link"}));
+                    started = true;
+                }
+                _ => {}
+            }
+        }
         if started {
-            write_pids(out, &slots);
+            write_pids(out, &slots, link.as_ref());
         }
         let vehicle_gone =
             !slots[Proc::Vehicle as usize].kid.running() && slots[Proc::Vehicle as usize].restart_at.is_none();
@@ -596,7 +693,11 @@ pub(super) fn supervise(
     for s in &mut slots {
         s.kid.finish(Duration::from_secs(10));
     }
-    write_pids(out, &slots);
+    // The link announces the end for a moment, then exits by itself.
+    if let Some(lk) = &mut link {
+        lk.kid.finish(Duration::from_secs(5));
+    }
+    write_pids(out, &slots, link.as_ref());
     events.clear();
     monitor.poll([false; 3], &mut events);
     let _ = flog.flush();
@@ -620,6 +721,7 @@ pub(super) fn supervise(
         supervision: sup,
         announced,
         rss_kb,
+        link_restarts: link.map(|l| l.restarts),
     })
 }
 
