@@ -353,18 +353,27 @@ fn killed_and_paused_processes_are_restarted_or_detected_and_the_report_adds_up(
     let f = &r["faults"];
     assert_eq!(f["planned"], 6, "{f:#}");
     assert_eq!(f["injected"], 6, "{f:#}");
-    // Every fault injected was cleared: restarted processes were heard from
-    // again, paused ones were detected and heard from again.
+    // Every fault injected was survived, and cleared (restarted processes
+    // heard from again, paused ones detected and heard from again) unless
+    // the goal came first: faults are drawn over the budget's first 85 %,
+    // and a mission that reaches its goal sooner may end inside the last one.
     assert_eq!(f["injected_by_kind"], f["survived_by_kind"], "{f:#}");
-    assert_eq!(f["injected_by_kind"], f["cleared_by_kind"], "{f:#}");
-    assert_eq!(f["cut_short_by_end"], 0, "{f:#}");
-    for key in ["kill_planner", "kill_vehicle-sim", "pause_sensor-sim"] {
-        assert!(f["injected_by_kind"][key].as_u64().unwrap_or(0) > 0, "{key}: {f:#}");
+    let count = |k: &str, kind: &str| f[k][kind].as_u64().unwrap_or(0);
+    let kinds: Vec<String> = f["injected_by_kind"].as_object().unwrap().keys().cloned().collect();
+    let cleared: u64 = kinds.iter().map(|k| count("cleared_by_kind", k)).sum();
+    let cut_short = f["cut_short_by_end"].as_u64().unwrap();
+    assert_eq!(cleared + cut_short, 6, "{f:#}");
+    assert!(cut_short <= 1, "more than the last fault overtaken by the end: {f:#}");
+    for k in &kinds {
+        assert!(count("cleared_by_kind", k) <= count("injected_by_kind", k), "{k}: {f:#}");
     }
-    let pauses = f["injected_by_kind"]["pause_sensor-sim"].as_u64().unwrap();
+    for key in ["kill_planner", "kill_vehicle-sim", "pause_sensor-sim"] {
+        assert!(count("injected_by_kind", key) > 0, "{key}: {f:#}");
+    }
+    let pauses = count("injected_by_kind", "pause_sensor-sim");
     let s = &r["supervision"];
     assert!(
-        s["stalls"]["sensor-sim"]["injected"].as_u64().unwrap() >= pauses,
+        s["stalls"]["sensor-sim"]["injected"].as_u64().unwrap() + cut_short >= pauses,
         "{s:#}"
     );
     // Each restarted vehicle resumed from the journal; every restart was
