@@ -365,7 +365,10 @@ fn killed_and_paused_processes_are_restarted_or_detected_and_the_report_adds_up(
     assert_eq!(cleared + cut_short, 6, "{f:#}");
     assert!(cut_short <= 1, "more than the last fault overtaken by the end: {f:#}");
     for k in &kinds {
-        assert!(count("cleared_by_kind", k) <= count("injected_by_kind", k), "{k}: {f:#}");
+        assert!(
+            count("cleared_by_kind", k) <= count("injected_by_kind", k),
+            "{k}: {f:#}"
+        );
     }
     for key in ["kill_planner", "kill_vehicle-sim", "pause_sensor-sim"] {
         assert!(count("injected_by_kind", key) > 0, "{key}: {f:#}");
