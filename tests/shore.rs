@@ -27,27 +27,9 @@ fn endpoint() -> String {
     format!("tcp/127.0.0.1:{}", l.local_addr().expect("local address").port())
 }
 
+/// A scaled-time mission that listens for the shore on `ep`.
 fn start_mission(out: &Path, p: &str, ep: &str, scale: &str, extra: &[&str]) -> Child {
-    Command::new(binary("planner"))
-        .args([
-            "mission",
-            "--quiet",
-            "--nodes",
-            "12",
-            "--seed",
-            "2",
-            "--time-scale",
-            scale,
-        ])
-        .args(["--ipc-prefix", p, "--shore", ep])
-        .args(extra)
-        .arg("--out")
-        .arg(out)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start the mission")
+    auv_system::start_scaled_mission(out, p, scale, &[&["--shore", ep][..], extra].concat())
 }
 
 fn start_shore(ep: &str, out: Option<&Path>, extra: &[&str]) -> Child {
@@ -381,4 +363,104 @@ fn peers_without_credentials_can_neither_read_nor_command_and_a_viewer_cannot_co
     assert_eq!(r["shore_link"]["commands"]["applied"], 1, "{:#}", r["shore_link"]);
     let s = read_json(&watch_out.join("shore.json"));
     assert_eq!(s["plans"], r["plans"], "{s:#}");
+}
+
+/// The default mission file with another time budget, written into `dir`.
+fn mission_with_budget(dir: &Path, name: &str, budget: &str) -> PathBuf {
+    let text = std::fs::read_to_string(auv_system::workspace_root().join("missions/benoits-cove.toml"))
+        .expect("the shipped default mission");
+    assert!(
+        text.contains("time_available_s = 31000"),
+        "the default mission's budget moved"
+    );
+    write(
+        dir,
+        name,
+        &text.replacen("time_available_s = 31000", &format!("time_available_s = {budget}"), 1),
+    )
+}
+
+#[test]
+fn a_mission_from_shore_is_checked_then_taken_on_where_the_vehicle_is() {
+    let _alone = alone();
+    let (out, cfg, watch_out) = (temp_dir("rm"), temp_dir("rc"), temp_dir("rw"));
+    let (p, ep) = (prefix("sr"), endpoint());
+    let watcher = start_shore(&ep, Some(&watch_out), &["--give-up-s", "60"]);
+    let mission = start_mission(&out, &p, &ep, "300", &[]);
+    wait_for_line(&out, "mission.log", "\"plan\"");
+    // Caught ashore, never sent: not a mission file.
+    let junk = write(&cfg, "junk.toml", "format = \"auv-mission/1\"\nname = 3\n");
+    let o = shore_command(
+        &ep,
+        &["--command", "replace-mission", "--mission", junk.to_str().unwrap()],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("--mission") && text(&o.stderr).contains("name"),
+        "{}",
+        text(&o.stderr)
+    );
+    // Refused onboard: more time than the vehicle has left.
+    let long = mission_with_budget(&cfg, "long.toml", "1000000");
+    let o = shore_command(
+        &ep,
+        &["--command", "replace-mission", "--mission", long.to_str().unwrap()],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
+    let e = text(&o.stderr);
+    assert!(
+        e.contains("refused: budget_out_of_range") && e.contains("has left"),
+        "{e}"
+    );
+    // Taken on: the ack carries the first plan of the new mission.
+    let short = mission_with_budget(&cfg, "short.toml", "9000");
+    let args = [
+        "--command",
+        "replace-mission",
+        "--mission",
+        short.to_str().unwrap(),
+        "--command-id",
+        "777",
+    ];
+    let o = shore_command(&ep, &args);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let first = text(&o.stdout);
+    assert!(
+        first.contains("replace-mission (id 777): applied") && first.contains("plan seq "),
+        "{first}"
+    );
+    // Sent again (the console's resend, or by hand): answered again, taken on once.
+    let o = shore_command(&ep, &args);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(text(&o.stdout), first);
+    finish(mission, "mission");
+    let watched = finish(watcher, "shore");
+    // The first leg ends where the shore replaced it; the second is the new
+    // mission, from the vehicle's position, to its goal.
+    let r1 = read_json(&out.join("report.json"));
+    assert_eq!(r1["outcome"], "replaced", "{r1:#}");
+    let rep = &r1["replaced"];
+    assert_eq!(rep["command_id"], 777, "{rep:#}");
+    assert_eq!(rep["continued_in"], "leg-2", "{rep:#}");
+    let r2 = read_json(&out.join("leg-2/report.json"));
+    assert_eq!(r2["outcome"], "goal_reached", "{r2:#}");
+    assert_eq!(r2["time_available_s"], 9000.0, "{r2:#}");
+    for r in [&r1, &r2] {
+        assert_eq!(r["supervision"]["restarts_total"]["external"], 0, "{r:#}");
+        assert_eq!(r["shm_files_left"], 0, "{r:#}");
+    }
+    assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+    // Where the second leg started is where the first left the vehicle.
+    let journal = std::fs::read_to_string(out.join("journal.jsonl")).unwrap_or_default();
+    assert!(
+        !journal.contains("\"end\""),
+        "the first leg was replaced, not ended:\n{journal}"
+    );
+    let start = rep["start_at"].as_array().expect("start_at");
+    assert_eq!(start.len(), 3, "{rep:#}");
+    // The console watched both legs through and ended with the second.
+    let s = read_json(&watch_out.join("shore.json"));
+    assert_eq!(s["outcome"], "goal_reached", "{s:#}\n{}", text(&watched.stderr));
+    let log = std::fs::read_to_string(out.join("faults.log")).unwrap_or_default();
+    assert_eq!(log.matches("\"replace_mission\"").count(), 2, "{log}");
 }

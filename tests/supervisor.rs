@@ -23,27 +23,7 @@ fn alone() -> std::sync::MutexGuard<'static, ()> {
 
 /// Starts a scaled-time mission writing into `out`.
 fn start_mission(out: &Path, p: &str, extra: &[&str]) -> Child {
-    Command::new(binary("planner"))
-        .args([
-            "mission",
-            "--quiet",
-            "--nodes",
-            "12",
-            "--seed",
-            "2",
-            "--time-scale",
-            "1500",
-            "--ipc-prefix",
-            p,
-        ])
-        .args(extra)
-        .arg("--out")
-        .arg(out)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start the mission")
+    auv_system::start_scaled_mission(out, p, "1500", extra)
 }
 
 /// Waits until the planner has published a plan and `name`'s pid in

@@ -5,8 +5,8 @@
 #
 # Creates (once) a virtual environment under the workspace's target/
 # folder, installs this package into it the way a user does
-# (`pip install ./clients/python`, which pulls iceoryx2==0.10.0 from PyPI)
-# plus pytest (and mcap, jsonschema and Foxglove's schemas for the MCAP
+# (`pip install ./clients/python[shore]`, which pulls iceoryx2==0.10.0 and
+# eclipse-zenoh==1.10.2 from PyPI) plus pytest (and mcap, jsonschema and Foxglove's schemas for the MCAP
 # test), and runs the tests from outside the source tree so they
 # exercise the installed package. AUV_BIN_DIR names the folder of the
 # planner, sensor-sim and vehicle-sim binaries (default target/debug; `cargo
@@ -23,7 +23,7 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 # `python -m pip`, not bin/pip: a venv copied or moved keeps the old path
 # in bin/pip's shebang and would install into the old venv.
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check "$here" pytest mcap==1.6.0 jsonschema
+"$venv/bin/python" -m pip install --quiet --disable-pip-version-check "$here[shore]" pytest mcap==1.6.0 jsonschema
 # Foxglove's own JSON Schemas (npm @foxglove/schemas ships them as a JS
 # module), exported once as one NAME.json per schema for test_mcap.py.
 schemas=$target/foxglove-schemas

@@ -472,6 +472,7 @@ mod tests {
             scenario: None,
             nodes: Some(12),
             time_available_s: None,
+            start_at: None,
         })
         .unwrap();
         let default = Cli::try_parse_from(["x"]).unwrap().service;

@@ -77,6 +77,32 @@ pub fn temp_dir(tag: &str) -> PathBuf {
     d
 }
 
+/// A scaled-time `planner mission` of the tests' small network (12
+/// waypoints, seed 2) at `scale` mission seconds per second, in domain
+/// `prefix`, writing into `out`, with `extra` flags.
+pub fn start_scaled_mission(out: &Path, prefix: &str, scale: &str, extra: &[&str]) -> Child {
+    Command::new(binary("planner"))
+        .args([
+            "mission",
+            "--quiet",
+            "--nodes",
+            "12",
+            "--seed",
+            "2",
+            "--time-scale",
+            scale,
+        ])
+        .args(["--ipc-prefix", prefix])
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start the mission")
+}
+
 /// Runs `bin args…` to completion, killing it after `limit` (a watchdog, not
 /// a timing assertion: a hung process must not hang the test suite).
 pub fn run(bin: &Path, args: &[&str], limit: Duration) -> Output {

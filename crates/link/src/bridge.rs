@@ -29,9 +29,10 @@ use serde_json::{Value, json};
 use zenoh::Wait;
 use zenoh::key_expr::KeyExpr;
 
-use super::encode::{self, Ack, Command, Event, Heartbeat, PlanMsg, Snapshot, State, Status};
+use super::encode::{self, Ack, Command, Event, Heartbeat, PlanMsg, REPLACE_MISSION, Snapshot, State, Status};
 use super::keys;
 use super::monitor::{LinkChange, LinkMonitor, heartbeat_period};
+use super::replace::{MAX_MISSION_BYTES, Requests};
 use auv_messages::msg::{
     CommandAck, CommandKind, NO_NODE, OperatorCommand, Plan, PlannerStatus, VehicleState, WaypointSnapshot,
 };
@@ -70,6 +71,12 @@ pub struct BridgeConfig {
     /// restarted bridge still answers the history with the plans its
     /// predecessor forwarded.
     pub plan_history: Option<PathBuf>,
+    /// Where replace-mission requests go to the mission's supervisor
+    /// (`None`: no supervisor, the command is refused as `unsupported`).
+    pub requests: Option<Requests>,
+    /// This bridge serves the mission that replace-mission command `id`
+    /// brought: its ack goes out with the first plan of this mission.
+    pub replaced_by: Option<u64>,
 }
 
 /// The plans forwarded so far, oldest first, the last [`PLAN_HISTORY`]:
@@ -249,6 +256,34 @@ fn resolve(c: &Command, names: &[String]) -> Result<(CommandKind, f64, u32), &'s
     }
 }
 
+/// Files a replace-mission command for the supervisor; the path of its
+/// mission file, or the reason (and its words) it is refused here.
+fn file_replacement(c: &Command, requests: Option<&Requests>) -> Result<PathBuf, (&'static str, String)> {
+    let req = requests.ok_or(("unsupported", "this link runs without a mission supervisor".to_string()))?;
+    let text = c.mission.as_deref().unwrap_or("");
+    if text.trim().is_empty() {
+        return Err(("bad_mission", "the command carries no mission file".into()));
+    }
+    if text.len() > MAX_MISSION_BYTES {
+        return Err((
+            "bad_mission",
+            format!(
+                "the mission file has {} bytes; at most {MAX_MISSION_BYTES} are accepted",
+                text.len()
+            ),
+        ));
+    }
+    if req.submitted(c.id) {
+        return Ok(req.mission_path(c.id));
+    }
+    req.submit(c.id, text).map_err(|e| {
+        (
+            "unsupported",
+            format!("cannot file the request in {}: {e}", req.dir().display()),
+        )
+    })
+}
+
 /// Runs the bridge until the mission ends (then it lingers [`END_LINGER`])
 /// or a signal arrives.
 pub fn run_bridge(
@@ -295,6 +330,12 @@ pub fn run_bridge(
     let mut latest: HashMap<&'static str, Vec<u8>> = HashMap::new();
     // Ack per forwarded command id (None: forwarded, not answered yet).
     let mut answered: HashMap<u64, Option<Vec<u8>>> = HashMap::new();
+    // Replace-mission requests waiting for the supervisor's answer.
+    let mut replacing: Vec<u64> = Vec::new();
+    if let Some(id) = cfg.replaced_by {
+        answered.insert(id, None);
+    }
+    let mut replace_ack_due = cfg.replaced_by;
     let mut t = 0.0f64;
     let mut hb_seq = 0u64;
     let mut last_hb: Option<Instant> = None;
@@ -311,6 +352,7 @@ pub fn run_bridge(
         let now = Instant::now();
         // Onboard → shore.
         let mut out: Vec<(&'static str, Vec<u8>)> = Vec::new();
+        let mut acks: Vec<Ack> = Vec::new();
         states.drain(&mut |s| {
             let m = State::of(s);
             t = t.max(m.origin.t);
@@ -319,11 +361,33 @@ pub fn run_bridge(
             }
             out.push((keys::STATE, encode::encode(&m)));
         })?;
-        plans.drain(&mut |p| out.push((keys::PLAN, encode::encode(&PlanMsg::of(p)))))?;
+        let mut first_plan = None;
+        plans.drain(&mut |p| {
+            first_plan = first_plan.or(Some((p.header.seq, p.replan)));
+            out.push((keys::PLAN, encode::encode(&PlanMsg::of(p))));
+        })?;
+        // The replacement this mission is took effect with its first plan.
+        if let (Some(id), Some(plan)) = (replace_ack_due, first_plan) {
+            replace_ack_due = None;
+            acks.push(Ack::new(id, REPLACE_MISSION, true, "none", plan, t));
+        }
         statuses.drain(&mut |s| out.push((keys::STATUS, encode::encode(&Status::of(s)))))?;
         snapshots.drain(&mut |s| out.push((keys::SNAPSHOT, encode::encode(&Snapshot::of(s)))))?;
-        let mut acks: Vec<Ack> = Vec::new();
         acks_in.drain(&mut |a| acks.push(Ack::of(a)))?;
+        // The supervisor's refusals (an applied replacement is answered by
+        // the next mission's bridge, with that mission's first plan).
+        if let Some(req) = &cfg.requests {
+            replacing.retain(|&id| match req.answer_of(id) {
+                Some(ans) if !ans.applied => {
+                    let mut a = Ack::new(id, REPLACE_MISSION, false, &ans.reason, (0, 0), ans.t);
+                    a.detail = Some(ans.detail);
+                    acks.push(a);
+                    false
+                }
+                Some(_) => false,
+                None => true,
+            });
+        }
         for (leaf, bytes) in out {
             let p = match leaf {
                 keys::STATE => &pub_state,
@@ -349,7 +413,7 @@ pub fn run_bridge(
             } else {
                 summary.commands_refused += 1;
             }
-            log.line(t, json!({"event": "command_ack", "id": a.id, "command": a.command, "status": a.status, "reason": a.reason, "plan_seq": a.plan_seq, "replan": a.replan}));
+            log.line(t, json!({"event": "command_ack", "id": a.id, "command": a.command, "status": a.status, "reason": a.reason, "detail": a.detail, "plan_seq": a.plan_seq, "replan": a.replan}));
         }
         // Shore → onboard.
         while let Ok(Some(_)) = sub_heartbeat.try_recv() {
@@ -381,6 +445,25 @@ pub fn run_bridge(
                 }
                 Some(None) => continue,
                 None => {}
+            }
+            if c.command == REPLACE_MISSION && c.id != 0 {
+                match file_replacement(&c, cfg.requests.as_ref()) {
+                    Ok(path) => {
+                        answered.insert(c.id, None);
+                        replacing.push(c.id);
+                        log.line(t, json!({"event": "command", "id": c.id, "command": c.command, "mission": path.display().to_string()}));
+                    }
+                    Err((reason, detail)) => {
+                        let mut a = Ack::new(c.id, &c.command, false, reason, (0, 0), t);
+                        a.detail = Some(detail);
+                        let bytes = encode::encode(&a);
+                        let _ = pub_ack.put(bytes.clone()).wait();
+                        answered.insert(c.id, Some(bytes));
+                        summary.commands_refused += 1;
+                        log.line(t, json!({"event": "command_ack", "id": c.id, "command": c.command, "status": "refused", "reason": reason, "detail": a.detail, "plan_seq": 0, "replan": 0}));
+                    }
+                }
+                continue;
             }
             match resolve(&c, &cfg.names) {
                 Ok(_) if c.id == 0 => {
@@ -497,6 +580,33 @@ mod tests {
         }
         assert_eq!(mem.plans.len(), PLAN_HISTORY);
         assert_eq!(mem.plans.front().map(Vec::as_slice), Some(&b"{\"seq\":5}"[..]));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_new_mission_is_filed_once_for_the_supervisor_or_refused_with_its_reason() {
+        let dir = std::env::temp_dir().join(format!("auv-link-replace-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let req = Requests::new(&dir);
+        let text = "format = \"auv-mission/1\"\n".to_string();
+        let c = Command::replace_mission(8, text.clone());
+        assert_eq!(file_replacement(&c, None).unwrap_err().0, "unsupported");
+        let path = file_replacement(&c, Some(&req)).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), text);
+        assert_eq!(req.pending(), vec![8]);
+        // Sent again: the same request, not a second one.
+        assert_eq!(file_replacement(&c, Some(&req)).unwrap(), path);
+        assert_eq!(req.pending(), vec![8]);
+        let empty = Command::replace_mission(9, "  \n".into());
+        assert_eq!(file_replacement(&empty, Some(&req)).unwrap_err().0, "bad_mission");
+        let mut none = Command::replace_mission(10, String::new());
+        none.mission = None;
+        assert_eq!(file_replacement(&none, Some(&req)).unwrap_err().0, "bad_mission");
+        let huge = Command::replace_mission(11, "#".repeat(MAX_MISSION_BYTES + 1));
+        let (reason, detail) = file_replacement(&huge, Some(&req)).unwrap_err();
+        assert_eq!(reason, "bad_mission");
+        assert!(detail.contains("bytes"), "{detail}");
+        assert_eq!(req.pending(), vec![8]);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

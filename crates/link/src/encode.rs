@@ -27,6 +27,10 @@ pub const HEARTBEAT_TYPE: &str = "auv.shore.Heartbeat";
 pub const EVENT_TYPE: &str = "auv.shore.Event";
 /// Type of [`Command`].
 pub const COMMAND_TYPE: &str = "auv.shore.Command";
+/// The command that replaces the mission: the link and the mission's
+/// supervisor carry it out (it never reaches the planner), so it is no
+/// onboard `CommandKind`.
+pub const REPLACE_MISSION: &str = "replace-mission";
 
 /// Why a payload was refused.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -379,6 +383,10 @@ pub struct Ack {
     pub replan: u32,
     /// Mission time of the answer, s.
     pub t: f64,
+    /// The reason in words, when there is more to say than its name (a
+    /// refused replace-mission: the mission file's error line).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub detail: Option<String>,
 }
 
 impl Ack {
@@ -406,6 +414,7 @@ impl Ack {
             plan_seq: plan.0,
             replan: plan.1,
             t,
+            detail: None,
         }
     }
 
@@ -434,6 +443,9 @@ pub struct Command {
     /// add-task, remove-task: the waypoint's name in the mission file (or its id).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub waypoint: Option<String>,
+    /// replace-mission: the new mission file (`auv-mission/1` TOML), whole.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mission: Option<String>,
 }
 
 impl Command {
@@ -446,6 +458,20 @@ impl Command {
             command: command.as_str().into(),
             budget_s,
             waypoint,
+            mission: None,
+        }
+    }
+
+    /// A [`REPLACE_MISSION`] command carrying the mission file `text`.
+    pub fn replace_mission(id: u64, text: String) -> Self {
+        Self {
+            format: FORMAT.into(),
+            type_name: COMMAND_TYPE.into(),
+            id,
+            command: REPLACE_MISSION.into(),
+            budget_s: None,
+            waypoint: None,
+            mission: Some(text),
         }
     }
 }
@@ -598,7 +624,18 @@ mod tests {
     fn a_command_without_optional_fields_decodes() {
         let c = Command::new(5, CommandKind::AbortToGoal, None, None);
         let text = String::from_utf8(encode(&c)).unwrap();
-        assert!(!text.contains("budget_s"), "{text}");
+        assert!(!text.contains("budget_s") && !text.contains("mission"), "{text}");
         assert_eq!(decode::<Command>(text.as_bytes(), COMMAND_TYPE).unwrap(), c);
+        // A new mission travels as its text, whole; an ack may carry its reason in words.
+        let m = Command::replace_mission(6, "format = \"auv-mission/1\"\n[chart]\n".into());
+        let back: Command = decode(&encode(&m), COMMAND_TYPE).unwrap();
+        assert_eq!(
+            (back.command.as_str(), back.mission.as_deref()),
+            (REPLACE_MISSION, m.mission.as_deref())
+        );
+        let mut a = Ack::new(6, REPLACE_MISSION, false, "bad_mission", (0, 0), 1.0);
+        assert!(!String::from_utf8(encode(&a)).unwrap().contains("detail"));
+        a.detail = Some("waypoint \"start\": on land".into());
+        assert_eq!(decode::<Ack>(&encode(&a), types::ACK).unwrap(), a);
     }
 }

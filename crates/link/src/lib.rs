@@ -30,4 +30,5 @@ pub mod console;
 pub mod encode;
 pub mod keys;
 pub mod monitor;
+pub mod replace;
 pub mod session;

@@ -508,6 +508,7 @@ mod tests {
             scenario: None,
             nodes: Some(16),
             time_available_s: None,
+            start_at: None,
         })
         .unwrap()
     }

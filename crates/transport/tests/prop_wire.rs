@@ -48,6 +48,7 @@ fn fixture() -> &'static Fixture {
             scenario: None,
             nodes: Some(N),
             time_available_s: None,
+            start_at: None,
         };
         let mut w = load_world(&args).expect("the fixture world loads");
         let rules = WireRules::new(&w);

@@ -45,6 +45,23 @@ pub struct ScenarioArgs {
     /// Override the mission time budget, s.
     #[arg(long, value_name = "S")]
     pub time_available_s: Option<f64>,
+    /// Put the mission file's start waypoint here: x and y in the mission's
+    /// local frame and depth, m (how a vehicle takes on a new mission where
+    /// it is).
+    #[arg(long, value_name = "X,Y,DEPTH", value_parser = parse_start_at, conflicts_with_all = ["scenario", "nodes"])]
+    pub start_at: Option<[f64; 3]>,
+}
+
+/// `X,Y,DEPTH` as three finite numbers.
+fn parse_start_at(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().map_err(|_| format!("{p:?} is not a number")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
+        _ => Err("expected X,Y,DEPTH: three finite numbers, m".into()),
+    }
 }
 
 impl ScenarioArgs {
@@ -71,6 +88,10 @@ impl ScenarioArgs {
         if let Some(t) = self.time_available_s {
             v.push("--time-available-s".into());
             v.push(t.to_string());
+        }
+        if let Some([x, y, z]) = self.start_at {
+            v.push("--start-at".into());
+            v.push(format!("{x},{y},{z}"));
         }
         v
     }
@@ -119,6 +140,9 @@ pub enum WorldError {
     /// The chart or the generator failed.
     #[error("scenario: {0}")]
     Load(#[from] LoadError),
+    /// `--start-at` with the paper's generator.
+    #[error("--start-at: moves a mission file's start; the generator (--seed without --mission) has none")]
+    StartAtNeedsMission,
     /// A mission file that cannot be run.
     #[error("mission file {0}")]
     Mission(#[from] MissionError),
@@ -156,11 +180,15 @@ fn embedded_origin(chart: &ChartSource) -> Option<LocalFrame> {
 /// embedded default mission (see the module doc).
 pub fn load_world(args: &ScenarioArgs) -> Result<MissionWorld, WorldError> {
     if args.uses_generator() {
+        if args.start_at.is_some() {
+            return Err(WorldError::StartAtNeedsMission);
+        }
         return load_generated(args);
     }
     let overrides = Overrides {
         seed: args.seed,
         time_available_s: args.time_available_s,
+        start_at: args.start_at,
     };
     let (m, source) = match &args.mission {
         Some(path) => (mission_file::load(path, overrides)?, path.display().to_string()),
@@ -314,6 +342,7 @@ mod tests {
             scenario: None,
             nodes: Some(nodes),
             time_available_s: None,
+            start_at: None,
         }
     }
 
@@ -345,6 +374,7 @@ mod tests {
             scenario: None,
             nodes: Some(20),
             time_available_s: Some(9000.0),
+            start_at: None,
         };
         #[derive(clap::Parser)]
         struct P {
@@ -359,5 +389,49 @@ mod tests {
         let mut neg = args(1, 10);
         neg.time_available_s = Some(-1.0);
         assert!(matches!(load_world(&neg), Err(WorldError::Config(_))));
+        let mut moved = args(1, 10);
+        moved.start_at = Some([1.0, 2.0, 3.0]);
+        assert!(matches!(load_world(&moved), Err(WorldError::StartAtNeedsMission)));
+        for bad in ["1,2", "1,2,x", "1,2,inf", ""] {
+            let e = <P as clap::Parser>::try_parse_from(["x", "--start-at", bad])
+                .err()
+                .unwrap();
+            assert!(e.to_string().contains("--start-at"), "{e}");
+        }
+    }
+
+    #[test]
+    fn start_at_moves_the_start_of_a_mission_file_and_is_checked_like_a_waypoint() {
+        let default = ScenarioArgs {
+            seed: None,
+            mission: None,
+            scenario: None,
+            nodes: None,
+            time_available_s: None,
+            start_at: None,
+        };
+        let w = load_world(&default).unwrap();
+        let s0 = w.snapshot();
+        // Halfway along the first edge out of the start: over water.
+        let next = s0.edges.iter().find(|e| e.a == s0.start || e.b == s0.start).unwrap();
+        let (a, b) = (s0.nodes[next.a], s0.nodes[next.b]);
+        let mid = [(a.x + b.x) / 2.0, (a.y + b.y) / 2.0, (a.z + b.z) / 2.0];
+        let moved = load_world(&ScenarioArgs {
+            start_at: Some(mid),
+            ..default.clone()
+        })
+        .unwrap();
+        let p = moved.snapshot().nodes[0];
+        assert_eq!([p.x, p.y, p.z], mid);
+        assert_ne!(moved.fingerprint(), w.fingerprint());
+        // On land (the chart's land is somewhere; a corner far out is outside the area).
+        let e = load_world(&ScenarioArgs {
+            start_at: Some([-10.0, -10.0, 5.0]),
+            ..default
+        })
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(e.contains("start") && e.contains("outside the area"), "{e}");
     }
 }

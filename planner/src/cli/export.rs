@@ -67,6 +67,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let overrides = auv_world::mission_file::Overrides {
             seed: args.seed,
             time_available_s: None,
+            start_at: None,
         };
         let m = match &args.mission {
             Some(path) => auv_world::mission_file::load(path, overrides)?,

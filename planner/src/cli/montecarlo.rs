@@ -200,6 +200,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             auv_world::mission_file::Overrides {
                 seed: args.seed,
                 time_available_s: args.budget_s,
+                start_at: None,
             },
         )?),
         None => None,

@@ -1065,6 +1065,7 @@ mod tests {
             scenario: None,
             nodes: Some(10),
             time_available_s: None,
+            start_at: None,
         })
         .unwrap()
     }

@@ -8,6 +8,7 @@ pub mod external_kills;
 pub mod log;
 pub mod mcap_log;
 pub mod picture;
+pub mod replace;
 pub mod report;
 pub mod restart;
 pub mod route_geojson;

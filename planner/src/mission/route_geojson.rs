@@ -102,6 +102,7 @@ mod tests {
             scenario: None,
             nodes: None,
             time_available_s: None,
+            start_at: None,
         })
         .unwrap()
     }

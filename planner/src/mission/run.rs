@@ -369,6 +369,8 @@ pub(super) struct RunOut {
     pub(super) rss_kb: [u64; 3],
     /// Restarts of the shore link's process (`None`: no `--shore`).
     pub(super) link_restarts: Option<u64>,
+    /// The mission the shore replaced this one with.
+    pub(super) replaced: Option<super::replace::Replacement>,
 }
 
 /// How to start the simulators, where to write, and the mission's budget.
@@ -382,6 +384,15 @@ pub(super) struct Launch<'a> {
     pub(super) budget: f64,
     /// The world's seed (the default fault seed).
     pub(super) seed: u64,
+    /// The flags that build this world.
+    pub(super) scenario: &'a ScenarioArgs,
+    /// The world's geographic frame, if it has one.
+    #[cfg_attr(not(feature = "shore"), allow(dead_code))]
+    pub(super) frame: Option<&'a auv_world::frame::LocalFrame>,
+    /// Where the shore link files new missions (with `--shore`).
+    pub(super) requests: Option<&'a Path>,
+    /// The shore command whose mission this is.
+    pub(super) replaced_by: Option<u64>,
 }
 
 /// Runs one mission; returns its report and output folder.
@@ -406,15 +417,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         )));
     }
     let wall = Instant::now();
-    let mut world = load_world(&a.scenario)?;
-    let fingerprint = world.fingerprint();
-    let cfg = a
-        .service
-        .config(&world, a.lockstep && !a.enforce_deadline)
-        .map_err(|e| match e {
-            ServeError::Usage(u) => MissionError::Usage(u),
-            other => MissionError::Serve(other),
-        })?;
+    let world = load_world(&a.scenario)?;
     let usage = |e: auv_messages::wire::FaultListError| MissionError::Usage(e.to_string());
     let sensor_faults =
         FaultCycle::parse_opt("--inject-sensor", a.inject_sensor.as_deref(), &SENSOR_FAULTS).map_err(usage)?;
@@ -435,13 +438,109 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let out = a.out.clone().unwrap_or_else(|| fresh_out_dir(world.seed()));
     std::fs::create_dir_all(&out).map_err(|e| io_err(&out, e))?;
     signal::install();
-    // What killed supervisors left behind, and this domain's dead nodes.
+    // What killed supervisors left behind.
     clean_stale_runs();
-    let mark = RunMark::new(&prefix);
-    cleanup_dead_nodes(&domain_config(&prefix)?);
+    // The shore's new missions arrive here (the link files them).
+    let requests = a.shore.as_ref().map(|_| out.join("requests"));
+    let mut leg = Leg {
+        number: 1,
+        scenario: a.scenario.clone(),
+        world,
+        out: out.clone(),
+        replaced_by: None,
+    };
+    let faults = (&sensor_faults, &vehicle_faults);
+    loop {
+        let (report, replaced) = run_leg(a, &opts, &prefix, &mut leg, requests.as_deref(), faults, wall)?;
+        let Some(r) = replaced else {
+            return Ok((report, leg.out));
+        };
+        let next = leg.number + 1;
+        let next_out = out.join(format!("leg-{next}"));
+        note_replacement(&leg.out, &next_out, &r)?;
+        if !a.quiet {
+            println!(
+                "leg {}: replaced at t {:.0} s by the shore's mission (command {}); report in {}",
+                leg.number,
+                r.t,
+                r.command_id,
+                leg.out.join("report.json").display()
+            );
+        }
+        std::fs::create_dir_all(&next_out).map_err(|e| io_err(&next_out, e))?;
+        leg = Leg {
+            number: next,
+            scenario: r.scenario,
+            world: r.world,
+            out: next_out,
+            replaced_by: Some(r.command_id),
+        };
+    }
+}
 
-    let mut common = IpcArgs::of(&opts).to_flags();
-    common.extend(a.scenario.to_flags());
+/// One leg of a run: the mission the processes run from start to end, or
+/// until the shore replaces it with another.
+struct Leg {
+    /// 1 for the mission the run started with.
+    number: u32,
+    scenario: ScenarioArgs,
+    world: MissionWorld,
+    /// Its output folder (`<out>` for the first, `<out>/leg-<n>` after).
+    out: PathBuf,
+    /// The shore command that brought this mission.
+    replaced_by: Option<u64>,
+}
+
+/// Records in the ended leg's `report.json` that, when and by what it was
+/// replaced, and where the run went on.
+fn note_replacement(out: &Path, next: &Path, r: &super::replace::Replacement) -> Result<(), MissionError> {
+    let path = out.join("report.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+    let mut v: serde_json::Value = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
+    v["outcome"] = "replaced".into();
+    v["reason"] = format!(
+        "the shore replaced the mission at t {:.0} s (command {})",
+        r.t, r.command_id
+    )
+    .into();
+    v["replaced"] = serde_json::json!({
+        "command_id": r.command_id,
+        "t": r.t,
+        "mission": r.mission.display().to_string(),
+        "start_at": r.start_at,
+        "continued_in": next.file_name().map(|n| n.to_string_lossy().into_owned()),
+    });
+    let text = serde_json::to_string_pretty(&v).unwrap_or_default();
+    std::fs::write(&path, text + "\n").map_err(|e| io_err(&path, e))
+}
+
+/// Runs one leg in domain `prefix` and writes its outputs into `leg.out`;
+/// its report, and the mission that replaced it, if one did.
+fn run_leg(
+    a: &MissionArgs,
+    opts: &IpcOptions,
+    prefix: &str,
+    leg: &mut Leg,
+    requests: Option<&Path>,
+    (sensor_faults, vehicle_faults): (&FaultCycle, &FaultCycle),
+    wall: Instant,
+) -> Result<(Report, Option<super::replace::Replacement>), MissionError> {
+    let world = &mut leg.world;
+    let out = leg.out.as_path();
+    let fingerprint = world.fingerprint();
+    let cfg = a
+        .service
+        .config(world, a.lockstep && !a.enforce_deadline)
+        .map_err(|e| match e {
+            ServeError::Usage(u) => MissionError::Usage(u),
+            other => MissionError::Serve(other),
+        })?;
+    // This domain's dead nodes; each leg starts on services of its own world.
+    let mark = RunMark::new(prefix);
+    cleanup_dead_nodes(&domain_config(prefix)?);
+
+    let mut common = IpcArgs::of(opts).to_flags();
+    common.extend(leg.scenario.to_flags());
     let mut vehicle_args = common.clone();
     let mut sensor_args = common.clone();
     if !sensor_faults.is_empty() {
@@ -466,24 +565,28 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     vehicle_args.extend(["--journal".into(), journal_path.display().to_string()]);
     let budget = world.snapshot().time_available_s;
     let launch = Launch {
-        out: &out,
+        out,
         common: &common,
         sensor_args: &sensor_args,
         vehicle_args: &vehicle_args,
         budget,
         seed: world.seed(),
+        scenario: &leg.scenario,
+        frame: world.frame(),
+        requests,
+        replaced_by: leg.replaced_by,
     };
     if a.external.any() {
-        announce(a.external, &prefix, &a.vehicle, fingerprint, a.lockstep, &out);
+        announce(a.external, prefix, &a.vehicle, fingerprint, a.lockstep, out);
     }
-    let run = supervise(a, &opts, &launch, world.sensor_period_s(), fingerprint);
+    let run = supervise(a, opts, &launch, world.sensor_period_s(), fingerprint);
     // Outside processes leave when they see the end; the domain is retired
     // once they have.
-    if a.external.any() && !wait_for_outside_nodes(&prefix, std::time::Duration::from_secs(10))? {
+    if a.external.any() && !wait_for_outside_nodes(prefix, std::time::Duration::from_secs(10))? {
         eprintln!("planner: outside processes are still attached to domain {prefix}");
     }
-    let retired = retire_domain(&prefix)?;
-    let left = leftover_files(&prefix);
+    let retired = retire_domain(prefix)?;
+    let left = leftover_files(prefix);
     if retired {
         drop(mark);
     } else {
@@ -491,7 +594,8 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
         eprintln!("planner: iceoryx2 domain {prefix} still has live nodes; not removed");
         std::mem::forget(mark);
     }
-    let run = run?;
+    let mut run = run?;
+    let replaced = run.replaced.take();
     let last = run.last_state;
     // What happened is what the vehicle's journal says.
     let journal = &run.journal;
@@ -514,7 +618,7 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let stale_plans = last.map_or(0, |s| s.stale_plans);
     let rejected_vehicle = RejectCounters(last.map_or([0; auv_messages::msg::REJECT_KINDS], |s| s.rejected));
     let c = run.totals;
-    let trace = Trace::from_journal(journal, &world, run.last_epoch);
+    let trace = Trace::from_journal(journal, world, run.last_epoch);
     let report = Report {
         outcome,
         reason,
@@ -561,17 +665,17 @@ pub fn mission(a: &MissionArgs) -> Result<(Report, PathBuf), MissionError> {
     let mut report_json = report.to_json();
     if let Some(ep) = &a.shore {
         let link =
-            super::shore_report::shore_link_json(&out, ep, a.link.link_timeout_ms, run.link_restarts.unwrap_or(0));
+            super::shore_report::shore_link_json(out, ep, a.link.link_timeout_ms, run.link_restarts.unwrap_or(0));
         report_json["shore_link"] = link;
     }
     let text = serde_json::to_string_pretty(&report_json).unwrap_or_default();
     std::fs::write(&report_path, text + "\n").map_err(|e| io_err(&report_path, e))?;
     let geojson_path = out.join("route.geojson");
-    let collection = super::route_geojson::route_geojson(&world, &trace.visits);
+    let collection = super::route_geojson::route_geojson(world, &trace.visits);
     std::fs::write(&geojson_path, collection.to_string() + "\n").map_err(|e| io_err(&geojson_path, e))?;
-    write_mcap(&out, &world, &trace, a, report.latency_us)?;
-    plot(&out.join("mission"), &mut world, &trace, &report)?;
-    Ok((report, out))
+    write_mcap(out, world, &trace, a, report.latency_us)?;
+    plot(&out.join("mission"), world, &trace, &report)?;
+    Ok((report, replaced))
 }
 
 /// Writes `mission.mcap` (see [`super::mcap_log`]) from what the run

@@ -31,6 +31,7 @@ use std::time::{Duration, Instant};
 use serde_json::{Value, json};
 
 use super::child::Kid;
+use super::replace::Replacement;
 use super::restart::{
     DEFAULT_BACKOFF_MS, DEFAULT_MAX_RESTARTS, DEFAULT_WINDOW_S, RestartBudget, RestartPolicy, Verdict,
 };
@@ -174,6 +175,10 @@ enum Active {
 /// again before the fault counts as not cleared, real s.
 const CLEAR_LIMIT: Duration = Duration::from_secs(30);
 
+/// How often the supervisor looks for replace-mission requests.
+#[cfg(feature = "shore")]
+const REQUEST_POLL: Duration = Duration::from_millis(100);
+
 /// Longest wait for the vehicle to reach its hold, real s.
 const HOLD_LIMIT: Duration = Duration::from_secs(30);
 
@@ -288,7 +293,7 @@ pub(super) fn supervise(
     File::create(&log_path).map_err(|e| io_err(&log_path, e))?;
     let planner_args = ServeArgs {
         ipc: IpcArgs::of(opts),
-        scenario: a.scenario.clone(),
+        scenario: l.scenario.clone(),
         service: a.service.clone(),
         lockstep: a.lockstep && !a.enforce_deadline,
         log: Some(log_path),
@@ -326,6 +331,12 @@ pub(super) fn supervise(
                 "--plan-history".into(),
                 out.join("link-plans.jsonl").display().to_string(),
             ]);
+            if let Some(r) = l.requests {
+                args.extend(["--requests".into(), r.display().to_string()]);
+            }
+            if let Some(id) = l.replaced_by {
+                args.extend(["--replaced-by".into(), id.to_string()]);
+            }
             let me = std::env::current_exe().map_err(|e| MissionError::Child(format!("cannot locate planner: {e}")))?;
             let mut kid = Kid::new("link", me, &args, out).map_err(child)?;
             let journal = out.join("link.jsonl");
@@ -387,6 +398,8 @@ pub(super) fn supervise(
     let mut rss_kb = [0u64; 3];
     let mut rss_at = Instant::now();
     let journal_path = out.join("journal.jsonl");
+    let mut replaced: Option<Replacement> = None;
+    let mut requests_at = Instant::now();
     loop {
         let now = Instant::now();
         if rss_at.elapsed() >= Duration::from_millis(100) {
@@ -675,6 +688,54 @@ pub(super) fn supervise(
                 }
             }
         }
+        // A new mission from shore (the link files it): checked against
+        // where the vehicle is; taken on, it ends this leg.
+        #[cfg(feature = "shore")]
+        if let Some(dir) = l.requests
+            && requests_at.elapsed() >= REQUEST_POLL
+        {
+            requests_at = now;
+            let requests = auv_link::replace::Requests::new(dir);
+            for id in requests.pending() {
+                let over = final_state_seen || stopping || signal::shutdown_requested();
+                let vehicle = &mut slots[Proc::Vehicle as usize].kid;
+                let verdict = super::replace::take_on(id, &requests, l, a.external.any(), over, vehicle, &mut monitor);
+                let answer = match &verdict {
+                    Ok(r) => super::replace::applied(r.t),
+                    Err(refusal) => refusal.answer(monitor.last_state().map_or(0.0, |s| s.header.mission_time_s)),
+                };
+                note(
+                    &mut flog,
+                    t,
+                    json!({"event": "replace_mission", "id": id, "applied": answer.applied, "reason": answer.reason, "detail": answer.detail}),
+                );
+                if let Err(e) = requests.answer(id, &answer) {
+                    eprintln!("planner: cannot answer replace-mission {id}: {e}");
+                }
+                if let Ok(r) = verdict {
+                    eprintln!(
+                        "planner: taking on the mission of replace-mission {id} at t {:.0} s, from ({:.0}, {:.0}) m",
+                        r.t, r.start_at[0], r.start_at[1]
+                    );
+                    replaced = Some(r);
+                    break;
+                }
+            }
+            if replaced.is_some() {
+                // Killed, not stopped: a stopped vehicle would end the
+                // mission, and the link would announce that end ashore.
+                for s in &slots {
+                    s.kid.signal(libc::SIGKILL);
+                    s.kid.signal(libc::SIGCONT);
+                }
+                if let Some(lk) = &link {
+                    lk.kid.signal(libc::SIGKILL);
+                }
+                break;
+            }
+        }
+        #[cfg(not(feature = "shore"))]
+        let _ = (&mut requests_at, &mut replaced);
         if signal::shutdown_requested() && !forwarded {
             forwarded = true;
             stopping = true;
@@ -722,6 +783,7 @@ pub(super) fn supervise(
         announced,
         rss_kb,
         link_restarts: link.map(|l| l.restarts),
+        replaced,
     })
 }
 

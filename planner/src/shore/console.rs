@@ -17,8 +17,9 @@ use serde_json::{Value, json};
 use super::LinkOptions;
 use crate::mission::mcap_log::{self, ChannelWriter, PlanFigures, Topic};
 use auv_link::console::{Incoming, Received, ShoreLink};
-use auv_link::encode::{Ack, Command, PlanMsg, Snapshot, State, Status};
+use auv_link::encode::{Ack, Command, PlanMsg, REPLACE_MISSION, Snapshot, State, Status};
 use auv_link::monitor::LinkChange;
+use auv_link::replace::MAX_MISSION_BYTES;
 use auv_messages::msg::CommandKind;
 use auv_platform::clock::mono_now_ns;
 use auv_platform::signal;
@@ -43,8 +44,15 @@ pub struct ShoreArgs {
     #[allow(missing_docs)]
     pub link: LinkOptions,
     /// Send this command, wait for its ack, print it and exit.
-    #[arg(long, value_name = "abort-to-goal|set-time-budget|add-task|remove-task")]
+    #[arg(
+        long,
+        value_name = "abort-to-goal|set-time-budget|add-task|remove-task|replace-mission"
+    )]
     pub command: Option<String>,
+    /// replace-mission: the new mission file (`auv-mission/1`); the vehicle
+    /// takes it on where it is, within the time it has left.
+    #[arg(long, value_name = "FILE")]
+    pub mission: Option<PathBuf>,
     /// set-time-budget: the new mission time budget, s (mission time, like
     /// the mission's own budget).
     #[arg(long, value_name = "S")]
@@ -418,8 +426,26 @@ fn command_of(a: &ShoreArgs) -> Result<Option<Command>, String> {
     let Some(name) = &a.command else {
         return Ok(None);
     };
-    let kind = CommandKind::from_name(name)
-        .ok_or_else(|| format!("--command {name}: expected abort-to-goal, set-time-budget, add-task or remove-task"))?;
+    if a.command_id == Some(0) {
+        return Err("--command-id 0: must be > 0".into());
+    }
+    if name == REPLACE_MISSION {
+        let path = a
+            .mission
+            .as_deref()
+            .ok_or("--command replace-mission needs --mission FILE")?;
+        let text = replacement_mission(path)?;
+        return Ok(Some(Command::replace_mission(
+            a.command_id.unwrap_or_else(fresh_id),
+            text,
+        )));
+    }
+    if a.mission.is_some() {
+        return Err(format!("--mission: only with --command replace-mission, not {name}"));
+    }
+    let kind = CommandKind::from_name(name).ok_or_else(|| {
+        format!("--command {name}: expected abort-to-goal, set-time-budget, add-task, remove-task or replace-mission")
+    })?;
     match kind {
         CommandKind::SetTimeBudget => match a.budget_s {
             Some(b) if b.is_finite() && b > 0.0 => {}
@@ -430,9 +456,6 @@ fn command_of(a: &ShoreArgs) -> Result<Option<Command>, String> {
         }
         _ => {}
     }
-    if a.command_id == Some(0) {
-        return Err("--command-id 0: must be > 0".into());
-    }
     Ok(Some(Command::new(
         a.command_id.unwrap_or_else(fresh_id),
         kind,
@@ -441,6 +464,34 @@ fn command_of(a: &ShoreArgs) -> Result<Option<Command>, String> {
             .clone()
             .filter(|_| matches!(kind, CommandKind::AddTask | CommandKind::RemoveTask)),
     )))
+}
+
+/// The text of a mission file to send, checked here first as the vehicle
+/// will check it (all but where the vehicle is and the time it has left),
+/// so that a mistake is caught before it travels.
+fn replacement_mission(path: &std::path::Path) -> Result<String, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("--mission {}: {e}", path.display()))?;
+    if text.len() > MAX_MISSION_BYTES {
+        return Err(format!(
+            "--mission {}: {} bytes; at most {MAX_MISSION_BYTES} are sent",
+            path.display(),
+            text.len()
+        ));
+    }
+    auv_world::mission_file::load(path, auv_world::mission_file::Overrides::default())
+        .map_err(|e| format!("--mission: {e}"))?;
+    // Onboard the file is kept apart from the mission folder: a chart file
+    // relative to it would not be found there.
+    if let Some(chart) = auv_world::mission_file::chart_file(&text)
+        && chart.is_relative()
+    {
+        return Err(format!(
+            "--mission {}: chart file {} is relative to the file; the vehicle looks for it elsewhere: name it by its absolute path on the vehicle, or use an embedded chart",
+            path.display(),
+            chart.display()
+        ));
+    }
+    Ok(text)
 }
 
 /// How often an unanswered command is sent again (our choice: often
@@ -520,7 +571,11 @@ fn shore(a: &ShoreArgs) -> Result<u8, (u8, String)> {
             );
             return Ok(0);
         }
-        return Err((1, format!("{} (id {}) refused: {}", ack.command, ack.id, ack.reason)));
+        let detail = ack.detail.as_deref().map(|d| format!(" ({d})")).unwrap_or_default();
+        return Err((
+            1,
+            format!("{} (id {}) refused: {}{detail}", ack.command, ack.id, ack.reason),
+        ));
     }
     let mut rec = match &a.out {
         Some(d) => Some(Recorder::open(d, &a.vehicle).map_err(|e| (1, e))?),

@@ -35,6 +35,14 @@ pub struct LinkArgs {
     /// restarts, so a console catching up still gets them).
     #[arg(long, value_name = "FILE")]
     pub plan_history: Option<PathBuf>,
+    /// File replace-mission commands in this folder for the mission's
+    /// supervisor (without it, they are refused as unsupported).
+    #[arg(long, value_name = "DIR")]
+    pub requests: Option<PathBuf>,
+    /// This mission is the one replace-mission command ID brought: the
+    /// command's ack goes out with its first plan.
+    #[arg(long, value_name = "ID")]
+    pub replaced_by: Option<u64>,
 }
 
 fn link(a: &LinkArgs) -> Result<(), (u8, String)> {
@@ -57,6 +65,8 @@ fn link(a: &LinkArgs) -> Result<(), (u8, String)> {
         log: a.log.clone(),
         endpoint: a.listen.clone(),
         plan_history: a.plan_history.clone(),
+        requests: a.requests.clone().map(auv_link::replace::Requests::new),
+        replaced_by: a.replaced_by,
     };
     drop(world);
     let opts = a.ipc.options().map_err(|e| usage(e.to_string()))?;

@@ -266,6 +266,9 @@ pub struct Overrides {
     pub seed: Option<u64>,
     /// Replaces `vehicle.time_available_s`.
     pub time_available_s: Option<f64>,
+    /// Replaces the start waypoint's position: x, y (m, local frame) and
+    /// depth (m).
+    pub start_at: Option<[f64; 3]>,
 }
 
 /// `name` as a lowercase, dash-separated token (for snapshot names).
@@ -292,6 +295,13 @@ pub fn load(path: &Path, overrides: Overrides) -> Result<Mission, MissionError> 
     })?;
     let dir = path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
     parse(&text, &file, &dir, overrides)
+}
+
+/// The chart file a mission file names (`chart.png` or `chart.land_geojson`),
+/// as written; `None` for an embedded chart or a text that is no mission file.
+pub fn chart_file(text: &str) -> Option<PathBuf> {
+    let chart = resolve::read_doc(text).ok()?.chart;
+    chart.png.or(chart.land_geojson).map(PathBuf::from)
 }
 
 /// The embedded default mission, resolved.

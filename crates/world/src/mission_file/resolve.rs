@@ -124,7 +124,7 @@ fn line_column(text: &str, offset: usize) -> (usize, usize) {
 }
 
 /// Syntax, `format`, then the typed document.
-fn read_doc(text: &str) -> Result<MissionDoc, Problem> {
+pub(super) fn read_doc(text: &str) -> Result<MissionDoc, Problem> {
     let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
         let (line, column) = e.span().map_or((0, 0), |s| line_column(text, s.start));
         Problem::NotToml {
@@ -543,12 +543,19 @@ pub(super) fn resolve(text: &str, dir: &Path, overrides: Overrides) -> Result<Mi
     for (i, w) in doc.waypoint.iter().enumerate() {
         xy.push(position(i, w, frame.as_ref())?);
     }
+    let mut depth: Vec<f64> = doc.waypoint.iter().map(|w| w.depth_m).collect();
+    // A vehicle that takes this mission on where it is: the start is its
+    // position, checked below like any waypoint's.
+    if let Some([x, y, z]) = overrides.start_at {
+        xy[start_i] = (x, y);
+        depth[start_i] = z.clamp(0.0, MAX_DEPTH_M);
+    }
     let (water, chart_source, chart_name) = load_chart(&choice, dir, seed, frame.as_ref())?;
     let (width, height) = (water.width_m(), water.height_m());
     let nominal = |i: usize| Vec3 {
         x: xy[i].0,
         y: xy[i].1,
-        z: doc.waypoint[i].depth_m,
+        z: depth[i],
     };
     for (i, w) in doc.waypoint.iter().enumerate() {
         let err = |message: String| Problem::Waypoint {

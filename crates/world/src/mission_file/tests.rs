@@ -201,6 +201,7 @@ fn the_base_mission_resolves_with_the_formats_ids_names_and_tasks() {
         Overrides {
             seed: Some(4),
             time_available_s: None,
+            start_at: None,
         },
     )
     .unwrap();
