@@ -443,7 +443,14 @@ mod tests {
             .map(|s| s.to_string())
             .collect()
         };
-        let with_mission = every(&["--seed", "4", "--mission", mission.to_str().unwrap()]);
+        let with_mission = every(&[
+            "--seed",
+            "4",
+            "--mission",
+            mission.to_str().unwrap(),
+            "--start-at",
+            "120.5,80.25,3",
+        ]);
         let with_generator = every(&["--scenario", "some.toml", "--nodes", "12"]);
         let defaults = vec!["serve".to_string()];
         let mut passed = std::collections::BTreeSet::new();
