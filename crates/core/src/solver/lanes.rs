@@ -118,7 +118,7 @@ impl LaneRng {
 /// 64-bit rotates on AVX2 by itself, and this fill is a third of a PSO
 /// generation's instructions.
 #[cfg(target_arch = "x86_64")]
-mod simd {
+pub(crate) mod simd {
     use core::arch::x86_64::*;
 
     use super::LANES;
@@ -160,6 +160,54 @@ mod simd {
                 }
             }
         }
+    }
+
+    /// The sixteen states in AVX-512 registers, as [`fill_avx512`] holds
+    /// them (word, then lanes 0–7 / 8–15), for callers that draw and use
+    /// the words in one pass; [`next_avx512`] steps them and
+    /// [`store_avx512`] writes them back.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(crate) fn load_avx512(rng: &super::LaneRng) -> [[__m512i; 2]; 4] {
+        // SAFETY: each row is sixteen u64s; unaligned loads at 0 and 8.
+        unsafe {
+            core::array::from_fn(|w| core::array::from_fn(|h| _mm512_loadu_si512(rng.s[w][8 * h..].as_ptr().cast())))
+        }
+    }
+
+    /// Writes states from [`load_avx512`] back into `rng`.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(crate) fn store_avx512(rng: &mut super::LaneRng, st: &[[__m512i; 2]; 4]) {
+        for (word, regs) in st.iter().enumerate() {
+            for (h, reg) in regs.iter().enumerate() {
+                // SAFETY: as in `load_avx512`.
+                unsafe { _mm512_storeu_si512(rng.s[word][8 * h..].as_mut_ptr().cast(), *reg) };
+            }
+        }
+    }
+
+    /// One block of sixteen words (lanes 0–7, 8–15): exactly one chunk of
+    /// [`fill_avx512`], with the same state steps.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(crate) fn next_avx512(st: &mut [[__m512i; 2]; 4]) -> [__m512i; 2] {
+        core::array::from_fn(|h| {
+            let [s0, s1, s2, s3] = [st[0][h], st[1][h], st[2][h], st[3][h]];
+            let r = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
+            let t = _mm512_slli_epi64::<17>(s1);
+            let s2 = _mm512_xor_si512(s2, s0);
+            let s3 = _mm512_xor_si512(s3, s1);
+            let s1 = _mm512_xor_si512(s1, s2);
+            let s0 = _mm512_xor_si512(s0, s3);
+            let s2 = _mm512_xor_si512(s2, t);
+            let s3 = _mm512_rol_epi64::<45>(s3);
+            st[0][h] = s0;
+            st[1][h] = s1;
+            st[2][h] = s2;
+            st[3][h] = s3;
+            r
+        })
     }
 
     #[inline(always)]
