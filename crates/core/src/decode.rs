@@ -169,6 +169,9 @@ fn best_key(reach: &[f32], key: &[i32], slack: f32, len: usize) -> i32 {
 /// through the compare mask (bit set in `allowed` = unvisited), not by
 /// rewriting their keys, so no store sits in front of the next load. Same
 /// maxima as [`best_key`] on the same keys with visited keys at [`NO_KEY`].
+/// The scans take the padded length as a constant too (`LEN`, 0: the
+/// run-time `len`): each copy is then called from one place and unrolled,
+/// and the inliner takes it into the stream.
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use core::arch::x86_64::*;
@@ -180,34 +183,41 @@ mod avx512 {
     /// (not yet reduced across the register).
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn scan<const W: usize>(reach: &[f32], key: &[i32], slack: f32, len: usize, allowed: NodeSet<W>) -> __m512i {
+    fn scan<const W: usize, const LEN: usize>(
+        reach: &[f32],
+        key: &[i32],
+        slack: f32,
+        len: usize,
+        allowed: NodeSet<W>,
+    ) -> __m512i {
+        let len = if LEN == 0 { len } else { LEN };
         // The loads below rely on this (raw pointers, no bounds checks).
         assert!(len <= reach.len() && len <= key.len() && len <= 64 * W && len.is_multiple_of(SCAN_BLOCK));
-        let s = _mm512_set1_ps(slack);
-        let mut acc = _mm512_set1_epi32(NO_KEY);
-        let mut base = 0;
-        for word in allowed.0 {
-            // Shifted by a constant each block: cheaper than a variable
-            // shift per block.
-            let mut rest = word;
-            for _ in 0..64 / SCAN_BLOCK {
-                if base >= len {
-                    return acc;
-                }
-                // SAFETY: base + 16 ≤ len ≤ both lengths (asserted above).
-                unsafe {
+        // SAFETY: base + 16 ≤ len ≤ both lengths (asserted above).
+        unsafe {
+            let s = _mm512_set1_ps(slack);
+            let mut acc = _mm512_set1_epi32(NO_KEY);
+            let mut base = 0;
+            for word in allowed.0 {
+                // Shifted by a constant each block: cheaper than a variable
+                // shift per block.
+                let mut rest = word;
+                for _ in 0..64 / SCAN_BLOCK {
+                    if base >= len {
+                        return acc;
+                    }
                     let m = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(
                         rest as u16,
                         _mm512_loadu_ps(reach.as_ptr().add(base)),
                         s,
                     );
                     acc = _mm512_mask_max_epi32(acc, m, acc, _mm512_loadu_si512(key.as_ptr().add(base).cast()));
+                    rest >>= SCAN_BLOCK;
+                    base += SCAN_BLOCK;
                 }
-                rest >>= SCAN_BLOCK;
-                base += SCAN_BLOCK;
             }
+            acc
         }
-        acc
     }
 
     /// The best key of one row (see [`super::best_key`]).
@@ -220,22 +230,20 @@ mod avx512 {
         len: usize,
         allowed: NodeSet<W>,
     ) -> i32 {
-        _mm512_reduce_max_epi32(scan(reach, key, slack, len, allowed))
+        _mm512_reduce_max_epi32(scan::<W, 0>(reach, key, slack, len, allowed))
     }
 
-    /// `f32_down(limit − time[l])` for eight lanes in one conversion with
-    /// rounding towards −∞ (the same values as the scalar helper).
+    /// `f32_down(left)` in one scalar conversion with rounding towards −∞
+    /// (the same value as the portable helper). Per lane rather than one
+    /// eight-wide conversion: a vector load of the eight times just
+    /// stored one by one would stall on store forwarding.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    pub(super) fn slack(limit: f64, time: &[f64; IN_FLIGHT]) -> [f32; IN_FLIGHT] {
-        // SAFETY: `time` is eight f64s; unaligned load.
-        let t = unsafe { _mm512_loadu_pd(time.as_ptr()) };
-        let left = _mm512_sub_pd(_mm512_set1_pd(limit), t);
-        let down = _mm512_cvt_roundpd_ps::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(left);
-        let mut out = [0.0f32; IN_FLIGHT];
-        // SAFETY: `out` is eight f32s; unaligned store.
-        unsafe { _mm256_storeu_ps(out.as_mut_ptr(), down) };
-        out
+    pub(super) fn slack(left: f64) -> f32 {
+        _mm_cvtss_f32(_mm_cvt_roundsd_ss::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(
+            _mm_setzero_ps(),
+            _mm_set_sd(left),
+        ))
     }
 
     /// The best keys of eight rows at once: the eight scans, then one
@@ -243,47 +251,50 @@ mod avx512 {
     /// the shuffles of eight separate reductions).
     #[target_feature(enable = "avx512f")]
     #[inline]
-    pub(super) fn best_keys<const W: usize>(
+    pub(super) fn best_keys<const W: usize, const LEN: usize>(
         rows: [&[f32]; IN_FLIGHT],
         keys: &[super::PerNode<i32, W>; IN_FLIGHT],
         slack: &[f32; IN_FLIGHT],
         len: usize,
         allowed: &[NodeSet<W>; IN_FLIGHT],
     ) -> [i32; IN_FLIGHT] {
-        let a: [__m512i; IN_FLIGHT] = core::array::from_fn(|l| scan(rows[l], &keys[l], slack[l], len, allowed[l]));
-        // Halves of two lanes' registers side by side, then their max:
-        // each result holds lane 2j in 128-bit chunks 0–1, 2j+1 in 2–3.
-        let halves = |x: __m512i, y: __m512i| {
-            _mm512_max_epi32(
-                _mm512_shuffle_i64x2::<0b01_00_01_00>(x, y),
-                _mm512_shuffle_i64x2::<0b11_10_11_10>(x, y),
-            )
-        };
-        let h = [
-            halves(a[0], a[1]),
-            halves(a[2], a[3]),
-            halves(a[4], a[5]),
-            halves(a[6], a[7]),
-        ];
-        // Again: chunk k now holds lane k of the four.
-        let quarters = |x: __m512i, y: __m512i| {
-            _mm512_max_epi32(
-                _mm512_shuffle_i64x2::<0b10_00_10_00>(x, y),
-                _mm512_shuffle_i64x2::<0b11_01_11_01>(x, y),
-            )
-        };
-        let q = [quarters(h[0], h[1]), quarters(h[2], h[3])];
-        // Within each chunk: four values to one (every position).
-        let within = |x: __m512i| {
-            let x = _mm512_max_epi32(x, _mm512_shuffle_epi32::<0b01_00_11_10>(x));
-            _mm512_max_epi32(x, _mm512_shuffle_epi32::<0b10_11_00_01>(x))
-        };
-        let mut out = [[0i32; 16]; 2];
-        for (o, x) in out.iter_mut().zip(q) {
-            // SAFETY: `o` is 16 i32s; unaligned store.
-            unsafe { _mm512_storeu_si512(o.as_mut_ptr().cast(), within(x)) };
+        // SAFETY: `out` is two rows of 16 i32s (unaligned stores).
+        unsafe {
+            let a: [__m512i; IN_FLIGHT] =
+                core::array::from_fn(|l| scan::<W, LEN>(rows[l], &keys[l], slack[l], len, allowed[l]));
+            // Halves of two lanes' registers side by side, then their max:
+            // each result holds lane 2j in 128-bit chunks 0–1, 2j+1 in 2–3.
+            let halves = |x: __m512i, y: __m512i| {
+                _mm512_max_epi32(
+                    _mm512_shuffle_i64x2::<0b01_00_01_00>(x, y),
+                    _mm512_shuffle_i64x2::<0b11_10_11_10>(x, y),
+                )
+            };
+            let h = [
+                halves(a[0], a[1]),
+                halves(a[2], a[3]),
+                halves(a[4], a[5]),
+                halves(a[6], a[7]),
+            ];
+            // Again: chunk k now holds lane k of the four.
+            let quarters = |x: __m512i, y: __m512i| {
+                _mm512_max_epi32(
+                    _mm512_shuffle_i64x2::<0b10_00_10_00>(x, y),
+                    _mm512_shuffle_i64x2::<0b11_01_11_01>(x, y),
+                )
+            };
+            let q = [quarters(h[0], h[1]), quarters(h[2], h[3])];
+            // Within each chunk: four values to one (every position).
+            let within = |x: __m512i| {
+                let x = _mm512_max_epi32(x, _mm512_shuffle_epi32::<0b01_00_11_10>(x));
+                _mm512_max_epi32(x, _mm512_shuffle_epi32::<0b10_11_00_01>(x))
+            };
+            let mut out = [[0i32; 16]; 2];
+            for (o, x) in out.iter_mut().zip(q) {
+                _mm512_storeu_si512(o.as_mut_ptr().cast(), within(x));
+            }
+            core::array::from_fn(|l| out[l / 4][4 * (l % 4)])
         }
-        core::array::from_fn(|l| out[l / 4][4 * (l % 4)])
     }
 }
 
@@ -357,13 +368,21 @@ impl<const W: usize> Lanes<W> {
     };
 
     /// Packs the keys of `priorities` into lane `l` and puts its walk on
-    /// the start. Keys in the padding (n..len) are left as they are: their
-    /// reach is +∞, so no scan ever takes them.
+    /// the start. Keys in the padding (n..len) are anything: their reach is
+    /// +∞, so no scan ever takes them. A vector of at least `len` values
+    /// (the solvers' padded rows) is packed whole, in straight vector code.
     #[inline(always)]
-    fn begin<const AVX512: bool, P: Priority>(&mut self, l: usize, p: &Problem<W>, priorities: &[P], item: usize) {
-        let n = p.n();
-        let (keys, prio) = (&mut self.key[l][..n], &priorities[..n]);
-        for c in 0..n {
+    fn begin<const AVX512: bool, P: Priority>(
+        &mut self,
+        l: usize,
+        p: &Problem<W>,
+        len: usize,
+        priorities: &[P],
+        item: usize,
+    ) {
+        let m = if priorities.len() >= len { len } else { p.n() };
+        let (keys, prio) = (&mut self.key[l][..m], &priorities[..m]);
+        for c in 0..m {
             keys[c] = pack_key::<W>(prio[c].to_f32(), c);
         }
         let cur = p.start();
@@ -382,8 +401,9 @@ impl<const W: usize> Lanes<W> {
     /// (reached the goal, or a dead end: their route is left as it was).
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lanes are indexed across several arrays
-    fn round<const AVX512: bool, const L: usize>(&mut self, p: &Problem<W>, limit: f64) -> u32 {
-        let len = p.stride();
+    fn round<const AVX512: bool, const L: usize, const LEN: usize>(&mut self, p: &Problem<W>, limit: f64) -> u32 {
+        // A fixed length unrolls the scans into straight code.
+        let len = if LEN == 0 { p.stride() } else { LEN };
         let mut slack = [0.0f32; IN_FLIGHT];
         let mut best = [NO_KEY; IN_FLIGHT];
         if AVX512 {
@@ -393,13 +413,13 @@ impl<const W: usize> Lanes<W> {
                 // true, and they run only on CPUs with AVX-512F.
                 unsafe {
                     if L == IN_FLIGHT {
-                        slack = avx512::slack(limit, &self.time_s);
-                        let rows = core::array::from_fn(|l| p.reach_row(self.cur[l]));
+                        slack = core::array::from_fn(|l| avx512::slack(limit - self.time_s[l]));
+                        let rows = core::array::from_fn(|l| p.reach_from(self.cur[l]));
                         let allowed = core::array::from_fn(|l| !self.visited[l]);
-                        best = avx512::best_keys(rows, &self.key, &slack, len, &allowed);
+                        best = avx512::best_keys::<W, LEN>(rows, &self.key, &slack, len, &allowed);
                     } else {
                         for l in 0..L {
-                            slack[l] = f32_down(limit - self.time_s[l]);
+                            slack[l] = avx512::slack(limit - self.time_s[l]);
                             let row = p.reach_row(self.cur[l]);
                             best[l] = avx512::best_key(row, &self.key[l], slack[l], len, !self.visited[l]);
                         }
@@ -420,8 +440,13 @@ impl<const W: usize> Lanes<W> {
                 continue;
             }
             let next = key_id::<W>(best[l]);
+            // The figures are summed as the walk goes, in route order (so
+            // bit for bit those of `Repair::sum_figures`); the time also
+            // goes where the next round's slack reads it.
             // Only the time is kept while walking (the next step waits for
-            // it); the other figures are summed once the route is known.
+            // it); the other figures are summed once the route is known
+            // (summing them here too measured slower at 128 nodes: the
+            // edge records are four times the time table's size).
             self.time_s[l] += p.time_s(self.cur[l], next);
             self.route[l].push(next);
             self.visited[l].insert(next);
@@ -447,17 +472,30 @@ fn stream<'a, const AVX512: bool, const W: usize, P: Priority + 'a>(
     vector: &dyn Fn(usize) -> &'a [P],
     done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
 ) {
+    // Streams of eight walks on AVX-512 get a copy per padded length up
+    // to 128 nodes (the scan loops unrolled); other cases read the length
+    // at run time.
+    macro_rules! by_len {
+        ($($len:literal)*) => {
+            match p.stride() {
+                $($len if AVX512 && $len <= 64 * W => {
+                    stream_l::<AVX512, W, IN_FLIGHT, $len, P>(d, p, count, vector, done)
+                })*
+                _ => stream_l::<AVX512, W, IN_FLIGHT, 0, P>(d, p, count, vector, done),
+            }
+        };
+    }
     // One or two vectors (single and paired decodes) use that many lanes.
     match count {
-        1 => stream_l::<AVX512, W, 1, P>(d, p, count, vector, done),
-        2 => stream_l::<AVX512, W, 2, P>(d, p, count, vector, done),
-        _ => stream_l::<AVX512, W, IN_FLIGHT, P>(d, p, count, vector, done),
+        1 => stream_l::<AVX512, W, 1, 0, P>(d, p, count, vector, done),
+        2 => stream_l::<AVX512, W, 2, 0, P>(d, p, count, vector, done),
+        _ => by_len!(16 32 48 64 80 96 112 128),
     }
 }
 
-/// [`stream`] on lanes 0..L.
+/// [`stream`] on lanes 0..L, rows of `LEN` entries (0: [`Problem::stride`]).
 #[inline(always)]
-fn stream_l<'a, const AVX512: bool, const W: usize, const L: usize, P: Priority + 'a>(
+fn stream_l<'a, const AVX512: bool, const W: usize, const L: usize, const LEN: usize, P: Priority + 'a>(
     d: &mut Decoder<W>,
     p: &Problem<W>,
     count: usize,
@@ -465,11 +503,12 @@ fn stream_l<'a, const AVX512: bool, const W: usize, const L: usize, P: Priority 
     done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
 ) {
     let limit = p.budget_limit_s();
+    let len = if LEN == 0 { p.stride() } else { LEN };
     let Decoder { lanes, repair } = d;
     let mut live = 0u32;
     for l in 0..L {
         if l < count {
-            lanes.begin::<AVX512, P>(l, p, vector(l), l);
+            lanes.begin::<AVX512, P>(l, p, len, vector(l), l);
             live |= 1 << l;
         } else {
             lanes.visited[l] = NodeSet::FULL;
@@ -477,7 +516,7 @@ fn stream_l<'a, const AVX512: bool, const W: usize, const L: usize, P: Priority 
     }
     let mut next = count.min(L);
     while live != 0 {
-        let mut ended = lanes.round::<AVX512, L>(p, limit) & live;
+        let mut ended = lanes.round::<AVX512, L, LEN>(p, limit) & live;
         while ended != 0 {
             let l = ended.trailing_zeros() as usize;
             ended &= ended - 1;
@@ -495,7 +534,7 @@ fn stream_l<'a, const AVX512: bool, const W: usize, const L: usize, P: Priority 
             debug_assert_eq!(p.evaluate(route), Some(e));
             done(lanes.item[l], route, e);
             if next < count {
-                lanes.begin::<AVX512, P>(l, p, vector(next), next);
+                lanes.begin::<AVX512, P>(l, p, len, vector(next), next);
                 next += 1;
             } else {
                 live &= !(1 << l);

@@ -478,6 +478,13 @@ impl<const W: usize> Problem<W> {
     pub fn reach_row(&self, u: usize) -> &[f32] {
         &flat(&self.tables.reach_s)[u * self.stride..(u + 1) * self.stride]
     }
+    /// The look-ahead table from row `u` on (row `u` is its first
+    /// [`Problem::stride`] entries): one bounds check where
+    /// [`Problem::reach_row`] has two, for scans that check their length.
+    #[inline]
+    pub(crate) fn reach_from(&self, u: usize) -> &[f32] {
+        &flat(&self.tables.reach_s)[u * self.stride..]
+    }
     /// Everything the step `a → b` adds to a route (one cache line).
     #[inline]
     pub(crate) fn edge(&self, a: usize, b: usize) -> &EdgeData {

@@ -80,7 +80,7 @@ impl LaneRng {
         {
             if std::arch::is_x86_feature_detected!("avx512f") {
                 // SAFETY: the CPU has AVX-512F (checked just above).
-                return unsafe { simd::fill_avx512(&mut self.s, out) };
+                return unsafe { simd::fill_avx512(self, out) };
             }
             if std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: the CPU has AVX2 (checked just above).
@@ -118,48 +118,71 @@ impl LaneRng {
 /// 64-bit rotates on AVX2 by itself, and this fill is a third of a PSO
 /// generation's instructions.
 #[cfg(target_arch = "x86_64")]
-mod simd {
+pub(crate) mod simd {
     use core::arch::x86_64::*;
 
     use super::LANES;
 
     /// AVX-512: two registers per state word (lanes 0–7 and 8–15).
     #[target_feature(enable = "avx512f")]
-    pub(super) fn fill_avx512(s: &mut [[u64; LANES]; 4], out: &mut [u64]) {
-        // SAFETY: every pointer below comes from a `[u64; 16]` row or a
-        // 16-word chunk at offset 0 or 8, and unaligned loads/stores are
-        // used throughout.
-        unsafe {
-            let mut st = [[_mm512_setzero_si512(); 2]; 4];
-            for (word, regs) in st.iter_mut().enumerate() {
-                for (h, reg) in regs.iter_mut().enumerate() {
-                    *reg = _mm512_loadu_si512(s[word][8 * h..].as_ptr().cast());
-                }
-            }
-            for chunk in out.chunks_exact_mut(LANES) {
-                for h in 0..2 {
-                    let [s0, s1, s2, s3] = [st[0][h], st[1][h], st[2][h], st[3][h]];
-                    let r = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
-                    _mm512_storeu_si512(chunk[8 * h..].as_mut_ptr().cast(), r);
-                    let t = _mm512_slli_epi64::<17>(s1);
-                    let s2 = _mm512_xor_si512(s2, s0);
-                    let s3 = _mm512_xor_si512(s3, s1);
-                    let s1 = _mm512_xor_si512(s1, s2);
-                    let s0 = _mm512_xor_si512(s0, s3);
-                    let s2 = _mm512_xor_si512(s2, t);
-                    let s3 = _mm512_rol_epi64::<45>(s3);
-                    st[0][h] = s0;
-                    st[1][h] = s1;
-                    st[2][h] = s2;
-                    st[3][h] = s3;
-                }
-            }
-            for (word, regs) in st.iter().enumerate() {
-                for (h, reg) in regs.iter().enumerate() {
-                    _mm512_storeu_si512(s[word][8 * h..].as_mut_ptr().cast(), *reg);
-                }
+    pub(super) fn fill_avx512(rng: &mut super::LaneRng, out: &mut [u64]) {
+        let mut st = load_avx512(rng);
+        for chunk in out.chunks_exact_mut(LANES) {
+            for (h, r) in next_avx512(&mut st).into_iter().enumerate() {
+                // SAFETY: a 16-word chunk holds 8 words at offset 0 and 8;
+                // unaligned store.
+                unsafe { _mm512_storeu_si512(chunk[8 * h..].as_mut_ptr().cast(), r) };
             }
         }
+        store_avx512(rng, &st);
+    }
+
+    /// The sixteen states in AVX-512 registers, as [`fill_avx512`] holds
+    /// them (word, then lanes 0–7 / 8–15), for callers that draw and use
+    /// the words in one pass; [`next_avx512`] steps them and
+    /// [`store_avx512`] writes them back.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(crate) fn load_avx512(rng: &super::LaneRng) -> [[__m512i; 2]; 4] {
+        // SAFETY: each row is sixteen u64s; unaligned loads at 0 and 8.
+        unsafe {
+            core::array::from_fn(|w| core::array::from_fn(|h| _mm512_loadu_si512(rng.s[w][8 * h..].as_ptr().cast())))
+        }
+    }
+
+    /// Writes states from [`load_avx512`] back into `rng`.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(crate) fn store_avx512(rng: &mut super::LaneRng, st: &[[__m512i; 2]; 4]) {
+        for (word, regs) in st.iter().enumerate() {
+            for (h, reg) in regs.iter().enumerate() {
+                // SAFETY: as in `load_avx512`.
+                unsafe { _mm512_storeu_si512(rng.s[word][8 * h..].as_mut_ptr().cast(), *reg) };
+            }
+        }
+    }
+
+    /// One block of sixteen words (lanes 0–7, 8–15): exactly one chunk of
+    /// [`fill_avx512`], with the same state steps.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(crate) fn next_avx512(st: &mut [[__m512i; 2]; 4]) -> [__m512i; 2] {
+        core::array::from_fn(|h| {
+            let [s0, s1, s2, s3] = [st[0][h], st[1][h], st[2][h], st[3][h]];
+            let r = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
+            let t = _mm512_slli_epi64::<17>(s1);
+            let s2 = _mm512_xor_si512(s2, s0);
+            let s3 = _mm512_xor_si512(s3, s1);
+            let s1 = _mm512_xor_si512(s1, s2);
+            let s0 = _mm512_xor_si512(s0, s3);
+            let s2 = _mm512_xor_si512(s2, t);
+            let s3 = _mm512_rol_epi64::<45>(s3);
+            st[0][h] = s0;
+            st[1][h] = s1;
+            st[2][h] = s2;
+            st[3][h] = s3;
+            r
+        })
     }
 
     #[inline(always)]
@@ -249,7 +272,7 @@ mod tests {
             if std::arch::is_x86_feature_detected!("avx512f") {
                 let mut b = a.clone();
                 // SAFETY: AVX-512F checked just above.
-                unsafe { simd::fill_avx512(&mut b.s, &mut buf) };
+                unsafe { simd::fill_avx512(&mut b, &mut buf) };
                 assert_eq!(buf, expect);
                 assert_eq!(b.s, reference.s);
             }
