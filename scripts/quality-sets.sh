@@ -8,7 +8,7 @@ out=${1:?usage: quality-sets.sh OUT_DIR [SEEDS]}
 seeds=${2:-4}
 root=$(cd "$(dirname "$0")/.." && pwd)
 planner=${PLANNER:-$root/target/release/planner}
-bay="{\"png\": \"$root/planner/assets/bay-of-islands.png\", \"metres_per_pixel\": 20}"
+bay="{\"png\": \"$root/crates/world/assets/bay-of-islands.png\", \"metres_per_pixel\": 20}"
 family() { # split name first-seed scenario-json
   dir=$out/$1/$2
   mkdir -p "$dir"

@@ -25,6 +25,8 @@ fn err(path: &Path, e: impl std::fmt::Display) -> PlotError {
 
 /// Writes the figure to `path` (SVG).
 pub fn gap_curves(path: &Path, title: &str, curves: &[GapCurve<'_>]) -> Result<(), PlotError> {
+    // Text is drawn with the embedded font only (no system fonts needed).
+    crate::plot::register_font();
     let xs = curves.iter().flat_map(|c| c.points.iter().map(|p| p.0));
     let (lo, hi) = xs.fold((f64::INFINITY, 0.0f64), |(lo, hi), x| (lo.min(x), hi.max(x)));
     if !(lo.is_finite() && hi > 0.0) {

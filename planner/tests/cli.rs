@@ -727,8 +727,17 @@ fn convert_op_reads_oplib_files_in_their_documented_encoding() {
         "2",
         "--out",
         path_str(&csv),
+        "--plot",
+        path_str(&dir.join("q.svg")),
     ]);
     assert_ok(&out);
+    // A process of its own: the figure's text needs the embedded font registered here too.
+    let svg = std::fs::read_to_string(dir.join("q.svg")).unwrap();
+    assert!(
+        svg.contains("<svg") && svg.contains("gen1"),
+        "{}",
+        &svg[..svg.len().min(300)]
+    );
     let table = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(
         table.lines().filter(|l| l.contains(",best_known,")).count(),
