@@ -498,8 +498,11 @@ fn replacement_mission(path: &std::path::Path) -> Result<String, String> {
 /// enough to ride out a short loss, rare enough to be no load).
 const RESEND: Duration = Duration::from_millis(500);
 
-fn send_command(link: &mut ShoreLink, c: &Command, give_up: Duration) -> Result<Ack, String> {
+/// Sends `c` until its ack arrives; returns the ack and the time from the
+/// first send to the ack (the operator's round trip, retries included).
+fn send_command(link: &mut ShoreLink, c: &Command, give_up: Duration) -> Result<(Ack, Duration), String> {
     let t0 = Instant::now();
+    let mut first_sent: Option<Instant> = None;
     let mut sent: Option<Instant> = None;
     loop {
         if signal::shutdown_requested() {
@@ -517,14 +520,21 @@ fn send_command(link: &mut ShoreLink, c: &Command, give_up: Duration) -> Result<
         });
         for ch in changes {
             eprintln!("planner shore: link {}", change_name(&ch));
+            // An ack published while the link was down is lost: ask again at
+            // once rather than at the next resend (a new mission restarts the
+            // bridge, and its ack comes with the new bridge's first plan).
+            if matches!(ch, LinkChange::Restored { .. }) {
+                sent = None;
+            }
         }
         if let Some(a) = ack {
-            return Ok(a);
+            return Ok((a, first_sent.map_or(Duration::ZERO, |f| f.elapsed())));
         }
         let up = link.state() == auv_link::monitor::LinkState::Up;
         if up && sent.is_none_or(|s| s.elapsed() >= RESEND) {
             link.send(c).map_err(|e| e.to_string())?;
             sent = Some(Instant::now());
+            first_sent.get_or_insert(Instant::now());
         }
         if t0.elapsed() >= give_up {
             return Err(format!(
@@ -563,10 +573,11 @@ fn shore(a: &ShoreArgs) -> Result<u8, (u8, String)> {
         .map_err(|e| (1, e.to_string()))?;
     if let Some(c) = command {
         let give_up = Duration::from_secs_f64(a.give_up_s.unwrap_or(15.0));
-        let ack = send_command(&mut link, &c, give_up).map_err(|e| (1, e))?;
+        let (ack, round_trip) = send_command(&mut link, &c, give_up).map_err(|e| (1, e))?;
+        let ms = round_trip.as_secs_f64() * 1e3;
         if ack.applied() {
             println!(
-                "{} (id {}): applied at t {:.0} s, plan seq {} (re-plan {})",
+                "{} (id {}): applied at t {:.0} s, plan seq {} (re-plan {}), acknowledged {ms:.1} ms after sending",
                 ack.command, ack.id, ack.t, ack.plan_seq, ack.replan
             );
             return Ok(0);
@@ -574,7 +585,10 @@ fn shore(a: &ShoreArgs) -> Result<u8, (u8, String)> {
         let detail = ack.detail.as_deref().map(|d| format!(" ({d})")).unwrap_or_default();
         return Err((
             1,
-            format!("{} (id {}) refused: {}{detail}", ack.command, ack.id, ack.reason),
+            format!(
+                "{} (id {}) refused: {}{detail}, acknowledged {ms:.1} ms after sending",
+                ack.command, ack.id, ack.reason
+            ),
         ));
     }
     let mut rec = match &a.out {
