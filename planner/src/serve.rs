@@ -475,11 +475,8 @@ mod tests {
     fn the_service_plans_with_auto_unless_told_otherwise() {
         let world = auv_world::load::load_world(&auv_world::load::ScenarioArgs {
             seed: Some(1),
-            mission: None,
-            scenario: None,
             nodes: Some(12),
-            time_available_s: None,
-            start_at: None,
+            ..Default::default()
         })
         .unwrap();
         let default = Cli::try_parse_from(["x"]).unwrap().service;

@@ -504,11 +504,8 @@ mod tests {
     fn world(seed: u64) -> MissionWorld {
         load_world(&ScenarioArgs {
             seed: Some(seed),
-            mission: None,
-            scenario: None,
             nodes: Some(16),
-            time_available_s: None,
-            start_at: None,
+            ..Default::default()
         })
         .unwrap()
     }

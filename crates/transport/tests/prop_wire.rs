@@ -44,11 +44,8 @@ fn fixture() -> &'static Fixture {
     F.get_or_init(|| {
         let args = ScenarioArgs {
             seed: Some(11),
-            mission: None,
-            scenario: None,
             nodes: Some(N),
-            time_available_s: None,
-            start_at: None,
+            ..Default::default()
         };
         let mut w = load_world(&args).expect("the fixture world loads");
         let rules = WireRules::new(&w);

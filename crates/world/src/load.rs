@@ -25,7 +25,7 @@ use auv_core::problem::DEFAULT_RESERVE_S;
 use auv_core::problem::MAX_NODES;
 
 /// How a process picks its world (flags shared by all three binaries).
-#[derive(Clone, Debug, PartialEq, clap::Args)]
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
 pub struct ScenarioArgs {
     /// Scenario seed: the same in every process of a run (with --mission it
     /// replaces the file's `seed`) [default: the mission file's, or 1].
@@ -338,11 +338,8 @@ mod tests {
     fn args(seed: u64, nodes: usize) -> ScenarioArgs {
         ScenarioArgs {
             seed: Some(seed),
-            mission: None,
-            scenario: None,
             nodes: Some(nodes),
-            time_available_s: None,
-            start_at: None,
+            ..Default::default()
         }
     }
 
@@ -370,11 +367,9 @@ mod tests {
     fn flags_round_trip_and_bad_values_are_errors() {
         let a = ScenarioArgs {
             seed: Some(9),
-            mission: None,
-            scenario: None,
             nodes: Some(20),
             time_available_s: Some(9000.0),
-            start_at: None,
+            ..Default::default()
         };
         #[derive(clap::Parser)]
         struct P {
@@ -402,14 +397,7 @@ mod tests {
 
     #[test]
     fn start_at_moves_the_start_of_a_mission_file_and_is_checked_like_a_waypoint() {
-        let default = ScenarioArgs {
-            seed: None,
-            mission: None,
-            scenario: None,
-            nodes: None,
-            time_available_s: None,
-            start_at: None,
-        };
+        let default = ScenarioArgs::default();
         let w = load_world(&default).unwrap();
         let s0 = w.snapshot();
         // Halfway along the first edge out of the start: over water.

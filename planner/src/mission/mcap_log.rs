@@ -1061,11 +1061,8 @@ mod tests {
     fn world() -> MissionWorld {
         load_world(&ScenarioArgs {
             seed: Some(3),
-            mission: None,
-            scenario: None,
             nodes: Some(10),
-            time_available_s: None,
-            start_at: None,
+            ..Default::default()
         })
         .unwrap()
     }

@@ -76,12 +76,8 @@ pub(super) fn carry_position(
 /// The flags of a mission file as it stands (its own seed and budget).
 pub(super) fn file_args(mission: PathBuf) -> ScenarioArgs {
     ScenarioArgs {
-        seed: None,
         mission: Some(mission),
-        scenario: None,
-        nodes: None,
-        time_available_s: None,
-        start_at: None,
+        ..Default::default()
     }
 }
 

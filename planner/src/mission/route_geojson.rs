@@ -96,15 +96,7 @@ mod tests {
     use auv_world::load::{ScenarioArgs, load_world};
 
     fn default_world() -> MissionWorld {
-        load_world(&ScenarioArgs {
-            seed: None,
-            mission: None,
-            scenario: None,
-            nodes: None,
-            time_available_s: None,
-            start_at: None,
-        })
-        .unwrap()
+        load_world(&ScenarioArgs::default()).unwrap()
     }
 
     /// Checks what RFC 7946 and the mission format ask of the file, on the
