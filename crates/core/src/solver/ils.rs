@@ -434,7 +434,6 @@ impl<const W: usize> Moves<W> {
     /// and keeps the route time within `avail` of `out.0` more: its score
     /// change, nodes and node count. `skip_direct` leaves the bare edge out
     /// (it is the window itself when nothing is taken out).
-    #[allow(clippy::too_many_arguments)]
     fn best_path(
         &self,
         p: &Problem<W>,
@@ -443,7 +442,6 @@ impl<const W: usize> Moves<W> {
         out: (f64, f64, f64),
         avail: f64,
         skip_direct: bool,
-        max_in: usize,
     ) -> Option<(f64, [u16; 2], usize)> {
         let v = &self.value;
         let mut best: Option<(f64, [u16; 2], usize)> = None;
@@ -470,9 +468,6 @@ impl<const W: usize> Moves<W> {
             if nb.contains(x) {
                 let xb = fig(x, b);
                 take(ax.0 + xb.0, ax.1 + xb.1, ax.2 + xb.2, [x as u16, 0], 1);
-            }
-            if max_in < 2 {
-                continue;
             }
             let mut ys = p.neighbours(x) & nb & allowed;
             ys.remove(x);
@@ -518,14 +513,7 @@ impl<const W: usize> Moves<W> {
     /// size: what a route that already spends nearly all of its budget
     /// needs under `paper_cost`. `route` must be feasible; `e` is
     /// re-evaluated exactly. Returns whether the route changed.
-    pub fn reroute(
-        &mut self,
-        p: &Problem<W>,
-        route: &mut Route<W>,
-        e: &mut RouteEval,
-        max_rounds: u32,
-        max_in: usize,
-    ) -> bool {
+    pub fn reroute(&mut self, p: &Problem<W>, route: &mut Route<W>, e: &mut RouteEval, max_rounds: u32) -> bool {
         if !e.feasible {
             return false;
         }
@@ -548,7 +536,7 @@ impl<const W: usize> Moves<W> {
                     let out = Self::span(p, route, i, j);
                     let avail = limit - e.time_s;
                     let ends = (route.get(i), route.get(j));
-                    if let Some((d, nodes, m)) = self.best_path(p, ends, free | window, out, avail, j == i + 1, max_in)
+                    if let Some((d, nodes, m)) = self.best_path(p, ends, free | window, out, avail, j == i + 1)
                         && d > best.0
                     {
                         best = (d, i, j, nodes, m);
@@ -602,8 +590,7 @@ impl<const W: usize> Moves<W> {
         }
         let free = NodeSet::first(p.n()) - on_route - p.excluded();
         let out = Self::span(p, route, i, j);
-        let Some((_, nodes, m)) =
-            self.best_path(p, (route.get(i), route.get(j)), free, out, limit - e.time_s, false, 2)
+        let Some((_, nodes, m)) = self.best_path(p, (route.get(i), route.get(j)), free, out, limit - e.time_s, false)
         else {
             return NodeSet::EMPTY;
         };
@@ -714,7 +701,7 @@ mod tests {
                 assert!(gone.iter().all(|u| !r.iter().any(|x| x == u)));
                 kicked += usize::from(!gone.is_empty());
                 let before = e;
-                m.reroute(&p, &mut r, &mut e, 10_000, 2);
+                m.reroute(&p, &mut r, &mut e, 10_000);
                 assert_eq!(p.evaluate(&r), Some(e));
                 assert!(e.feasible && !p.better(&before, &e));
             }
