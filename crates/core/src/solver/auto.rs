@@ -29,9 +29,10 @@
 //! kick is a reroute kick instead ([`Moves::reroute_kick`]: 1–3
 //! consecutive nodes out, the best path of 0–2 others in between the same
 //! two route nodes), and every kick's result and new best route is
-//! polished by rerouting too ([`Moves::reroute`]). Only on sparse networks
-//! ([`REROUTE_MAX_DENSITY`]); under `max_weight` and on dense networks
-//! nothing of this runs (same routes, same random draws as without it).
+//! polished by rerouting too ([`Moves::reroute`]). On dense networks
+//! ([`REROUTE_MAX_DENSITY`]) one kick in four reroutes and nothing is
+//! polished by rerouting. Under `max_weight` nothing of this runs (same
+//! routes, same random draws as without it).
 //!
 //! Kicks are polished with the cheap moves ([`LocalSearch::improve`]);
 //! every new best route also gets the deep polish (or-opt, swap, pair
@@ -105,10 +106,11 @@ pub struct AutoSettings {
     pub deep_polish_max_n: usize,
     /// Longest segment the kicks' or-opt moves (0–3).
     pub or_opt_segment: usize,
-    /// Objectives that value time (`paper_cost`) on sparse networks
-    /// ([`REROUTE_MAX_DENSITY`]): every other kick is a reroute kick, and
-    /// routes are polished by rerouting too ([`Moves::reroute`]). No effect
-    /// under `max_weight`.
+    /// Objectives that value time (`paper_cost`): some kicks are reroute
+    /// kicks ([`Moves::reroute_kick`]; every other one, or one in four on
+    /// dense networks), and on sparse networks routes are polished by
+    /// rerouting too ([`Moves::reroute`], see [`REROUTE_MAX_DENSITY`]). No
+    /// effect under `max_weight`.
     pub reroute: bool,
 }
 
@@ -159,9 +161,13 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     steps: u32,
     /// Restarts since `start`.
     restarts: u32,
-    /// Whether this problem's kicks and polish reroute (see
-    /// [`AutoSettings::reroute`] and [`REROUTE_MAX_DENSITY`]).
+    /// Whether this problem's kicks reroute ([`AutoSettings::reroute`]).
     rerouting: bool,
+    /// One kick in this many reroutes (2, or 4 on dense networks).
+    reroute_every: u32,
+    /// Whether routes are polished by rerouting (sparse networks only, see
+    /// [`REROUTE_MAX_DENSITY`]).
+    reroute_polish: bool,
 }
 
 impl<const W: usize> Auto<W> {
@@ -187,6 +193,8 @@ impl<const W: usize> Auto<W> {
             steps: 0,
             restarts: 0,
             rerouting: false,
+            reroute_every: 2,
+            reroute_polish: false,
         }
     }
 
@@ -239,7 +247,7 @@ impl<const W: usize> Auto<W> {
     /// again when that changed it (`deep`: with the deep neighbourhood).
     /// Returns whether the route changed.
     fn reroute_polish(&mut self, p: &Problem<W>, route: &mut Route<W>, e: &mut RouteEval, deep: bool) -> bool {
-        if !self.rerouting || !self.moves.reroute(p, route, e, REROUTE_ROUNDS) {
+        if !self.reroute_polish || !self.moves.reroute(p, route, e, REROUTE_ROUNDS) {
             return false;
         }
         if deep {
@@ -267,9 +275,9 @@ impl<const W: usize> Auto<W> {
         };
         // A route that spends nearly all of its budget can only change at a
         // constant size, and a ruin needs an edge across every gap it
-        // makes: under paper_cost every other kick reroutes instead.
+        // makes: under paper_cost some kicks reroute instead.
         let mut barred = NodeSet::EMPTY;
-        if self.rerouting && rng.below(2) == 0 {
+        if self.rerouting && rng.below(self.reroute_every) == 0 {
             barred = self.moves.reroute_kick(p, &mut self.trial, &mut e, rng);
         }
         if barred.is_empty() {
@@ -344,16 +352,18 @@ const SHORTEN_ROUNDS: u32 = 8;
 /// Rounds of [`Moves::reroute`] per polish, at most (the same bound).
 const REROUTE_ROUNDS: u32 = 8;
 
-/// Largest edge density (edges over node pairs) at which `auto` reroutes
-/// (one reroute round costs about route length × degree² evaluations). On
-/// the sparse Bay of Islands networks (density 0.35–0.47), where a ruin
-/// often finds no edge across its gap, rerouting is what reaches the proved
-/// optima; on the dense Benoit's Cove ones (about 0.9) ruins close their
-/// gaps anyway, and rerouting cut the kicks per solve by 5–10× (polishing
-/// every kick) or, polishing new bests only, doubled the mean gap at
-/// 1000 ms (7 % → 14–16 %, `bc40-pc`), so there it is off. 0.75: between
-/// the two (the small random networks of the quality regression test, edge
-/// probability 0.6 plus a connecting path, reroute).
+/// Largest edge density (edges over node pairs) at which `auto` polishes
+/// by rerouting (one reroute round costs about route length × degree²
+/// evaluations) and every other kick reroutes. On the sparse Bay of Islands
+/// networks (density 0.35–0.47), where a ruin often finds no edge across
+/// its gap, that is what reaches the proved optima. On the dense Benoit's
+/// Cove ones (about 0.9) ruins close their gaps anyway; there polishing
+/// every kick cut the kicks per solve by 5–10×, polishing new bests only
+/// doubled `bc40-pc`'s mean gap at 1000 ms (7 % → 14–16 %), and one
+/// reroute kick in four without the polish did best (mean gap 53 → 39 %,
+/// 22 → 14 %, 7.1 → 3.3 % at 20, 100, 1000 ms). 0.75: between the two (the
+/// small random networks of the quality regression test, edge probability
+/// 0.6 plus a connecting path, count as sparse).
 const REROUTE_MAX_DENSITY: f64 = 0.75;
 
 impl<const W: usize> Default for Auto<W> {
@@ -382,8 +392,10 @@ impl<const W: usize> Solver<W> for Auto<W> {
         self.moves.set_objective(problem);
         let degrees: u32 = (0..problem.n()).map(|u| problem.neighbours(u).len()).sum();
         let pairs = (problem.n() * problem.n().saturating_sub(1)).max(1) as f64;
-        self.rerouting =
-            self.settings.reroute && Value::of(problem).values_time() && degrees as f64 <= REROUTE_MAX_DENSITY * pairs;
+        let sparse = degrees as f64 <= REROUTE_MAX_DENSITY * pairs;
+        self.rerouting = self.settings.reroute && Value::of(problem).values_time();
+        self.reroute_polish = self.rerouting && sparse;
+        self.reroute_every = if sparse { 2 } else { 4 };
         self.ruin_cap = self.settings.ruin_min;
     }
 
