@@ -117,9 +117,9 @@ fn paper_cost_stays_near_the_proved_optimum() {
     }
     let mean = gaps.iter().sum::<f64>() / gaps.len() as f64;
     let worst = gaps.iter().copied().fold(0.0, f64::max);
-    // Today: 4 of 6 at the optimum, mean 14.9 %, worst 82.4 % (seed 4: a
-    // two-edge route where the optimum takes three). Weak, but a planner
-    // that optimised weight instead of this cost fails it.
+    // Today: 6 of 6 at the optimum (before rerouting: 4 of 6, mean
+    // 14.9 %, worst 82.4 %, seed 4 a two-edge route where the optimum takes
+    // three). A planner that optimised weight instead of this cost fails it.
     assert!(mean <= MEAN_BOUND_PC, "mean gap {mean:.2} %");
     assert!(worst <= WORST_BOUND_PC, "worst gap {worst:.2} %");
 }
@@ -127,5 +127,5 @@ fn paper_cost_stays_near_the_proved_optimum() {
 /// Bounds with a margin over today's figures (see each test).
 const MEAN_BOUND_MW: f64 = 3.5;
 const WORST_BOUND_MW: f64 = 12.0;
-const MEAN_BOUND_PC: f64 = 20.0;
-const WORST_BOUND_PC: f64 = 90.0;
+const MEAN_BOUND_PC: f64 = 5.0;
+const WORST_BOUND_PC: f64 = 25.0;

@@ -12,6 +12,11 @@
 //!   O(free nodes) per insertion instead of O(free · route).
 //! - [`Moves::ruin`]: removes a random segment, random nodes, or the route
 //!   nodes nearest a random one (the three usual ruin shapes).
+//! - [`Moves::reroute`] and [`Moves::reroute_kick`]: replace up to three
+//!   consecutive route nodes by the best path of 0–2 free nodes between the
+//!   same two route nodes (exchanges at a constant route size, and no edge
+//!   across the gap needed): what `paper_cost` routes that nearly use up
+//!   their budget need.
 //!
 //! Contract: routes stay simple paths start → goal over existing edges; no
 //! move makes a feasible route infeasible (times are checked against the
@@ -417,6 +422,197 @@ impl<const W: usize> Moves<W> {
     }
 }
 
+/// Most route nodes one reroute takes out, and most free nodes the new
+/// path between the same two route nodes carries (our choice: 3 out, 2 in,
+/// so one reroute covers the 1↔1, 2↔1, 1↔2, 2↔2 and 3↔2 exchanges; a path
+/// of 3 would cost deg³ evaluations per window).
+pub const REROUTE_OUT: usize = 3;
+
+impl<const W: usize> Moves<W> {
+    /// The best path of 0–2 nodes of `allowed` from `a` to `b` that replaces
+    /// figures `out` (time, weight, Σ ξ/ρ of the sub-path it stands in for)
+    /// and keeps the route time within `avail` of `out.0` more: its score
+    /// change, nodes and node count. `skip_direct` leaves the bare edge out
+    /// (it is the window itself when nothing is taken out).
+    fn best_path(
+        &self,
+        p: &Problem<W>,
+        (a, b): (usize, usize),
+        allowed: NodeSet<W>,
+        out: (f64, f64, f64),
+        avail: f64,
+        skip_direct: bool,
+    ) -> Option<(f64, [u16; 2], usize)> {
+        let v = &self.value;
+        let mut best: Option<(f64, [u16; 2], usize)> = None;
+        let mut take = |t: f64, w: f64, r: f64, nodes: [u16; 2], m: usize| {
+            if t - out.0 > avail {
+                return;
+            }
+            let d = v.delta(t - out.0, w - out.1, r - out.2);
+            if best.is_none_or(|(bd, _, _)| d > bd) {
+                best = Some((d, nodes, m));
+            }
+        };
+        let fig = |x: usize, y: usize| (p.time_s(x, y), p.gain(x, y), p.risk_ratio(x, y));
+        if !skip_direct && p.has_edge(a, b) {
+            let (t, w, r) = fig(a, b);
+            take(t, w, r, [0, 0], 0);
+        }
+        let nb = p.neighbours(b);
+        for x in (p.neighbours(a) & allowed).iter() {
+            let ax = fig(a, x);
+            if ax.0 - out.0 > avail {
+                continue;
+            }
+            if nb.contains(x) {
+                let xb = fig(x, b);
+                take(ax.0 + xb.0, ax.1 + xb.1, ax.2 + xb.2, [x as u16, 0], 1);
+            }
+            let mut ys = p.neighbours(x) & nb & allowed;
+            ys.remove(x);
+            for y in ys.iter() {
+                let (xy, yb) = (fig(x, y), fig(y, b));
+                take(
+                    ax.0 + xy.0 + yb.0,
+                    ax.1 + xy.1 + yb.1,
+                    ax.2 + xy.2 + yb.2,
+                    [x as u16, y as u16],
+                    2,
+                );
+            }
+        }
+        best
+    }
+
+    /// Figures (time, weight, Σ ξ/ρ) of `route` from position `i` to `j`.
+    fn span(p: &Problem<W>, route: &Route<W>, i: usize, j: usize) -> (f64, f64, f64) {
+        let mut f = (0.0, 0.0, 0.0);
+        for k in i..j {
+            let (x, y) = (route.get(k), route.get(k + 1));
+            f = (f.0 + p.time_s(x, y), f.1 + p.gain(x, y), f.2 + p.risk_ratio(x, y));
+        }
+        f
+    }
+
+    /// Replaces positions `i + 1 .. j` of `route` by `nodes[..m]`.
+    fn splice(route: &mut Route<W>, i: usize, j: usize, nodes: [u16; 2], m: usize) {
+        for _ in i + 1..j {
+            route.remove(i + 1);
+        }
+        for (k, &u) in nodes[..m].iter().enumerate() {
+            route.insert(i + 1 + k, u as usize);
+        }
+    }
+
+    /// Reroute local search: replaces the nodes between two route nodes
+    /// (up to [`REROUTE_OUT`] of them, consecutive) by the best path of 0–2
+    /// free nodes between the same two, best improvement per round, until
+    /// none improves or `max_rounds`. Unlike insertion and removal it needs
+    /// no edge across the gap, and it exchanges nodes at a constant route
+    /// size: what a route that already spends nearly all of its budget
+    /// needs under `paper_cost`. `route` must be feasible; `e` is
+    /// re-evaluated exactly. Returns whether the route changed.
+    pub fn reroute(&mut self, p: &Problem<W>, route: &mut Route<W>, e: &mut RouteEval, max_rounds: u32) -> bool {
+        if !e.feasible {
+            return false;
+        }
+        let limit = p.budget_limit_s() - EPS * p.budget_s();
+        let mut changed = false;
+        for _ in 0..max_rounds {
+            let mut on_route = NodeSet::EMPTY;
+            for u in route.iter() {
+                on_route.insert(u);
+            }
+            let free = NodeSet::first(p.n()) - on_route - p.excluded();
+            let len = route.len();
+            let mut best = (EPS, 0, 0, [0u16; 2], 0);
+            for i in 0..len - 1 {
+                let mut window = NodeSet::EMPTY;
+                for j in i + 1..len.min(i + 2 + REROUTE_OUT) {
+                    if j > i + 1 {
+                        window.insert(route.get(j - 1));
+                    }
+                    let out = Self::span(p, route, i, j);
+                    let avail = limit - e.time_s;
+                    let ends = (route.get(i), route.get(j));
+                    if let Some((d, nodes, m)) = self.best_path(p, ends, free | window, out, avail, j == i + 1)
+                        && d > best.0
+                    {
+                        best = (d, i, j, nodes, m);
+                    }
+                }
+            }
+            if best.0 <= EPS {
+                break;
+            }
+            let (_, i, j, nodes, m) = best;
+            let keep = *route;
+            Self::splice(route, i, j, nodes, m);
+            match p.evaluate(route) {
+                Some(x) if x.feasible && p.better(&x, e) => {
+                    *e = x;
+                    changed = true;
+                }
+                _ => {
+                    *route = keep;
+                    break;
+                }
+            }
+        }
+        changed
+    }
+
+    /// A reroute kick: takes out 1–[`REROUTE_OUT`] consecutive route nodes
+    /// at a random place and puts in the best path of 0–2 other free nodes
+    /// between the two route nodes around them, worse or not (no edge across
+    /// the gap needed, unlike [`Moves::ruin`]). Returns the nodes taken out
+    /// (empty when the route is too short or no path fits; `route` is then
+    /// unchanged). `e` is re-evaluated exactly.
+    pub fn reroute_kick(
+        &mut self,
+        p: &Problem<W>,
+        route: &mut Route<W>,
+        e: &mut RouteEval,
+        rng: &mut PlannerRng,
+    ) -> NodeSet<W> {
+        let len = route.len();
+        if !e.feasible || len < 3 {
+            return NodeSet::EMPTY;
+        }
+        let limit = p.budget_limit_s() - EPS * p.budget_s();
+        let i = rng.below((len - 2) as u32) as usize;
+        let most = REROUTE_OUT.min(len - 2 - i);
+        let j = i + 2 + rng.below(most as u32) as usize;
+        let mut on_route = NodeSet::EMPTY;
+        for u in route.iter() {
+            on_route.insert(u);
+        }
+        let free = NodeSet::first(p.n()) - on_route - p.excluded();
+        let out = Self::span(p, route, i, j);
+        let Some((_, nodes, m)) = self.best_path(p, (route.get(i), route.get(j)), free, out, limit - e.time_s, false)
+        else {
+            return NodeSet::EMPTY;
+        };
+        let mut gone = NodeSet::EMPTY;
+        for k in i + 1..j {
+            gone.insert(route.get(k));
+        }
+        let keep = *route;
+        Self::splice(route, i, j, nodes, m);
+        match p.evaluate(route) {
+            Some(x) if x.feasible => {
+                *e = x;
+                gone
+            }
+            _ => {
+                *route = keep;
+                NodeSet::EMPTY
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -484,6 +680,62 @@ mod tests {
             }
         }
         assert!(filled > 100, "{filled}");
+    }
+
+    #[test]
+    fn reroute_keeps_routes_exact_and_leaves_no_improving_window() {
+        let mut m = Moves::new();
+        let mut rng = PlannerRng::new(6);
+        let mut windows = 0;
+        let mut kicked = 0;
+        for p in problems().into_iter().filter(|p| Value::of(p).values_time()) {
+            m.set_objective(&p);
+            let Some((mut r, mut e)) = direct_route(&p) else {
+                continue;
+            };
+            m.fill(&p, &mut r, &mut e, NodeSet::EMPTY, 0.3, &mut rng);
+            for _ in 0..4 {
+                let gone = m.reroute_kick(&p, &mut r, &mut e, &mut rng);
+                assert_eq!(p.evaluate(&r), Some(e));
+                assert!(e.feasible);
+                assert!(gone.iter().all(|u| !r.iter().any(|x| x == u)));
+                kicked += usize::from(!gone.is_empty());
+                let before = e;
+                m.reroute(&p, &mut r, &mut e, 10_000);
+                assert_eq!(p.evaluate(&r), Some(e));
+                assert!(e.feasible && !p.better(&before, &e));
+            }
+            // Brute force: no replacement of up to REROUTE_OUT consecutive
+            // nodes by a path of at most two others beats the result.
+            let ids = r.to_vec();
+            let free: Vec<usize> = (0..p.n())
+                .filter(|u| !ids.contains(u) && !p.excluded().contains(*u))
+                .collect();
+            for i in 0..ids.len() - 1 {
+                for j in i + 1..ids.len().min(i + 2 + REROUTE_OUT) {
+                    let mut paths: Vec<Vec<usize>> = vec![vec![]];
+                    let pool: Vec<usize> = free.iter().copied().chain(ids[i + 1..j].iter().copied()).collect();
+                    for &x in &pool {
+                        paths.push(vec![x]);
+                        for &y in pool.iter().filter(|&&y| y != x) {
+                            paths.push(vec![x, y]);
+                        }
+                    }
+                    for path in paths {
+                        let c: Vec<usize> = ids[..=i].iter().chain(&path).chain(&ids[j..]).copied().collect();
+                        let Some(ce) = Route::from_slice(&c).and_then(|cr| p.evaluate(&cr)) else {
+                            continue;
+                        };
+                        windows += 1;
+                        assert!(
+                            !ce.feasible || p.score(&ce) <= p.score(&e) + 1e-9,
+                            "{c:?} beats {ids:?}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(kicked > 20 && windows > 1000, "{kicked} kicks, {windows} windows");
     }
 
     #[test]
