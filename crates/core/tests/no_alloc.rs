@@ -29,17 +29,20 @@ use auv_platform::alloc_counter::{self, CountingAllocator};
 static ALLOC: CountingAllocator = CountingAllocator;
 
 /// Problems of several sizes up to the class's capacity, under both
-/// objectives (built before counting).
+/// objectives, on sparse and dense networks (`auto` picks its moves by
+/// density), built before counting.
 fn problems<const W: usize>() -> Vec<Problem<W>> {
     let mut out = Vec::new();
     let top = nodes_of(W);
     for (n, seed) in [(12, 1), (40.min(top), 2), (top, 3)] {
-        for objective in [Objective::MaxWeight, Objective::PaperCost { phi1: 0.01, phi2: 1.0 }] {
-            // Sparser at 512 nodes, so the tables are not mostly edges.
-            let density = if n > 128 { 0.1 } else { 0.4 };
-            let mut inst = random_instance(n, density, 31_000.0, seed);
-            inst.objective = objective;
-            out.push(Problem::from_instance(&inst).expect("connected at these densities"));
+        // Sparser at 512 nodes, so the tables are not mostly edges.
+        let densities: &[f64] = if n > 128 { &[0.1] } else { &[0.4, 0.9] };
+        for &density in densities {
+            for objective in [Objective::MaxWeight, Objective::PaperCost { phi1: 0.01, phi2: 1.0 }] {
+                let mut inst = random_instance(n, density, 31_000.0, seed);
+                inst.objective = objective;
+                out.push(Problem::from_instance(&inst).expect("connected at these densities"));
+            }
         }
     }
     out
