@@ -546,6 +546,20 @@ mod tests {
     type NodeSet = crate::problem::NodeSet;
 
     #[test]
+    fn the_quickest_route_takes_the_shortest_time_to_the_goal() {
+        let p = Problem::from_instance(&line_instance()).unwrap();
+        let r = p.quickest_route().unwrap();
+        assert_eq!(r.ids(), &[0, 3]);
+        // Without the shortcut: along the line, in the time the tables give.
+        let mut inst = line_instance();
+        inst.edges.retain(|e| (e.a, e.b) != (0, 3));
+        let p = Problem::from_instance(&inst).unwrap();
+        let r = p.quickest_route().unwrap();
+        assert_eq!(r.ids(), &[0, 1, 2, 3]);
+        assert_eq!(p.evaluate(&r).unwrap().time_s, p.to_goal_s(0));
+    }
+
+    #[test]
     fn tables_follow_the_format_formulas() {
         let p = Problem::from_instance(&line_instance()).unwrap();
         assert_eq!(p.time_s(0, 1), 110.0);

@@ -204,6 +204,54 @@ impl RouteEval {
 }
 
 impl<const W: usize> Problem<W> {
+    /// The quickest start → goal path (by time), `None` when the goal cannot
+    /// be reached. Dense Dijkstra from the start with parent links, so the
+    /// path is simple even with zero-time edges; no allocation.
+    pub fn quickest_route(&self) -> Option<Route<W>> {
+        let n = self.n();
+        let mut dist = PerNode::<f64, W>::splat(f64::INFINITY);
+        let mut parent = PerNode::<usize, W>::splat(usize::MAX);
+        let mut done = self.excluded();
+        dist[self.start()] = 0.0;
+        loop {
+            let mut u = usize::MAX;
+            let mut best = f64::INFINITY;
+            for (v, &d) in dist.iter().enumerate().take(n) {
+                if !done.contains(v) && d < best {
+                    best = d;
+                    u = v;
+                }
+            }
+            if u == usize::MAX {
+                return None;
+            }
+            if u == self.goal() {
+                break;
+            }
+            done.insert(u);
+            for v in self.neighbours(u).iter() {
+                let c = best + self.time_s(u, v);
+                if c < dist[v] {
+                    dist[v] = c;
+                    parent[v] = u;
+                }
+            }
+        }
+        let mut rev = PerNode::<usize, W>::splat(0);
+        let mut len = 0;
+        let mut u = self.goal();
+        while u != usize::MAX {
+            rev[len] = u;
+            len += 1;
+            u = parent[u];
+        }
+        let mut route = Route::new();
+        for &v in rev[..len].iter().rev() {
+            route.push(v);
+        }
+        Some(route)
+    }
+
     /// Evaluates `route` on this problem; `None` when it is not a valid
     /// route (wrong ends, a repeated or excluded node, a non-edge).
     pub fn evaluate(&self, route: &Route<W>) -> Option<RouteEval> {

@@ -51,7 +51,7 @@ mod tests;
 use std::time::{Duration, Instant};
 
 use crate::capacity::DEFAULT_WORDS;
-use crate::capacity::{PerNode, nodes_of};
+use crate::capacity::nodes_of;
 use crate::instance::Objective;
 use crate::problem::{NodeSet, Problem};
 use crate::route::{Route, RouteEval};
@@ -257,7 +257,8 @@ pub fn solve_exact<const W: usize>(
         open_bound: f64::NEG_INFINITY,
     };
     // The quickest route is the first incumbent, so one always exists.
-    quickest_route(problem, &mut search.route);
+    // Reachable: checked above.
+    search.route = problem.quickest_route().unwrap_or_default();
     search.offer();
     if let Some(r) = settings.warm_start {
         search.route = r;
@@ -336,48 +337,4 @@ pub fn solve_exact<const W: usize>(
         nodes_explored: search.nodes,
         elapsed: t0.elapsed(),
     })
-}
-
-/// Writes the quickest start→goal path into `route` (dense Dijkstra from
-/// the start with parent links, so the path is simple even with zero-time edges).
-fn quickest_route<const W: usize>(p: &Problem<W>, route: &mut Route<W>) {
-    let n = p.n();
-    let mut dist = PerNode::<f64, W>::splat(f64::INFINITY);
-    let mut parent = PerNode::<usize, W>::splat(usize::MAX);
-    let mut done = p.excluded();
-    dist[p.start()] = 0.0;
-    loop {
-        let mut u = usize::MAX;
-        let mut best = f64::INFINITY;
-        for (v, &d) in dist.iter().enumerate().take(n) {
-            if !done.contains(v) && d < best {
-                best = d;
-                u = v;
-            }
-        }
-        if u == usize::MAX || u == p.goal() {
-            break;
-        }
-        done.insert(u);
-        for v in p.neighbours(u).iter() {
-            let c = best + p.time_s(u, v);
-            if c < dist[v] {
-                dist[v] = c;
-                parent[v] = u;
-            }
-        }
-    }
-    // Walk back from the goal (reachable: `solve_exact` checked it).
-    let mut rev = PerNode::<usize, W>::splat(0);
-    let mut len = 0;
-    let mut u = p.goal();
-    while u != usize::MAX {
-        rev[len] = u;
-        len += 1;
-        u = parent[u];
-    }
-    route.clear();
-    for &v in rev[..len].iter().rev() {
-        route.push(v);
-    }
 }
