@@ -252,6 +252,15 @@ impl<const W: usize> Problem<W> {
         Some(route)
     }
 
+    /// The nodes a route could still take: neither on `route` nor excluded.
+    pub fn free_nodes(&self, route: &Route<W>) -> crate::problem::NodeSet<W> {
+        let mut on_route = crate::problem::NodeSet::EMPTY;
+        for u in route.iter() {
+            on_route.insert(u);
+        }
+        crate::problem::NodeSet::first(self.n()) - on_route - self.excluded()
+    }
+
     /// Evaluates `route` on this problem; `None` when it is not a valid
     /// route (wrong ends, a repeated or excluded node, a non-edge).
     pub fn evaluate(&self, route: &Route<W>) -> Option<RouteEval> {

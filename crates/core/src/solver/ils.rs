@@ -265,12 +265,10 @@ impl<const W: usize> Moves<W> {
         // A margin below the budget so that rounding in the running sum
         // never makes the exact re-evaluation infeasible.
         let limit = p.budget_limit_s() - EPS * p.budget_s();
-        let mut on_route = NodeSet::EMPTY;
         for (k, u) in route.iter().enumerate() {
-            on_route.insert(u);
             self.pos[u] = k as u16;
         }
-        let mut free = NodeSet::first(p.n()) - on_route - p.excluded() - barred;
+        let mut free = p.free_nodes(route) - barred;
         let mut time_s = e.time_s;
         for u in free.iter() {
             self.noise[u] = if noise > 0.0 { 1.0 + noise * rng.next_f64() } else { 1.0 };
@@ -520,11 +518,7 @@ impl<const W: usize> Moves<W> {
         let limit = p.budget_limit_s() - EPS * p.budget_s();
         let mut changed = false;
         for _ in 0..max_rounds {
-            let mut on_route = NodeSet::EMPTY;
-            for u in route.iter() {
-                on_route.insert(u);
-            }
-            let free = NodeSet::first(p.n()) - on_route - p.excluded();
+            let free = p.free_nodes(route);
             let len = route.len();
             let mut best = (EPS, 0, 0, [0u16; 2], 0);
             for i in 0..len - 1 {
@@ -584,11 +578,7 @@ impl<const W: usize> Moves<W> {
         let i = rng.below((len - 2) as u32) as usize;
         let most = REROUTE_OUT.min(len - 2 - i);
         let j = i + 2 + rng.below(most as u32) as usize;
-        let mut on_route = NodeSet::EMPTY;
-        for u in route.iter() {
-            on_route.insert(u);
-        }
-        let free = NodeSet::first(p.n()) - on_route - p.excluded();
+        let free = p.free_nodes(route);
         let out = Self::span(p, route, i, j);
         let Some((_, nodes, m)) = self.best_path(p, (route.get(i), route.get(j)), free, out, limit - e.time_s, false)
         else {

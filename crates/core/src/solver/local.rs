@@ -123,14 +123,9 @@ impl<const W: usize> LocalSearch<W> {
 
     /// Scans every move and returns the best strictly improving one.
     fn best_move(&mut self, p: &Problem<W>, route: &Route<W>, eval: &RouteEval, deep: bool) -> Option<Move> {
-        let n = p.n();
         let len = route.len();
         let limit = p.budget_limit_s();
-        let mut on_route = NodeSet::EMPTY;
-        for u in route.iter() {
-            on_route.insert(u);
-        }
-        let free = NodeSet::first(n) - on_route - p.excluded();
+        let free = p.free_nodes(route);
         let mut best: Option<(Move, RouteEval)> = None;
         let mut consider = |mv: Move, e: RouteEval| {
             let incumbent = best.as_ref().map_or(eval, |(_, b)| b);
