@@ -8,7 +8,7 @@
 
 use crate::capacity::{DEFAULT_WORDS, PerNode, nodes_of};
 use crate::instance::{Instance, Objective};
-use crate::problem::{FEASIBILITY_REL_TOL, Problem};
+use crate::problem::{FEASIBILITY_REL_TOL, NodeSet, Problem};
 
 /// A node sequence of at most `64 · W` ids (the capacity class, see
 /// [`crate::capacity`]). Equality compares the sequences only (entries past
@@ -253,12 +253,12 @@ impl<const W: usize> Problem<W> {
     }
 
     /// The nodes a route could still take: neither on `route` nor excluded.
-    pub fn free_nodes(&self, route: &Route<W>) -> crate::problem::NodeSet<W> {
-        let mut on_route = crate::problem::NodeSet::EMPTY;
+    pub fn free_nodes(&self, route: &Route<W>) -> NodeSet<W> {
+        let mut on_route = NodeSet::EMPTY;
         for u in route.iter() {
             on_route.insert(u);
         }
-        crate::problem::NodeSet::first(self.n()) - on_route - self.excluded()
+        NodeSet::first(self.n()) - on_route - self.excluded()
     }
 
     /// Evaluates `route` on this problem; `None` when it is not a valid
@@ -267,7 +267,7 @@ impl<const W: usize> Problem<W> {
         if route.len() < 2 || route.get(0) != self.start() || route.last() != Some(self.goal()) {
             return None;
         }
-        let mut seen = crate::problem::NodeSet::<W>::EMPTY;
+        let mut seen = NodeSet::<W>::EMPTY;
         let mut e = RouteEval {
             weight: self.prize(self.start()),
             ..RouteEval::default()
