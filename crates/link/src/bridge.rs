@@ -336,9 +336,6 @@ pub fn run_bridge(
         answered.insert(id, None);
     }
     let mut replace_ack_due = cfg.replaced_by;
-    // That ack once sent: the shore that asked may still be reconnecting to
-    // this new bridge, so it is sent again whenever a shore is heard anew.
-    let mut replace_ack: Option<Vec<u8>> = None;
     let mut t = 0.0f64;
     let mut hb_seq = 0u64;
     let mut last_hb: Option<Instant> = None;
@@ -410,9 +407,6 @@ pub fn run_bridge(
         for a in acks {
             let bytes = encode::encode(&a);
             let _ = pub_ack.put(bytes.clone()).wait();
-            if Some(a.id) == cfg.replaced_by {
-                replace_ack = Some(bytes.clone());
-            }
             answered.insert(a.id, Some(bytes));
             if a.applied() {
                 summary.commands_applied += 1;
@@ -424,7 +418,12 @@ pub fn run_bridge(
         // Shore → onboard.
         while let Ok(Some(_)) = sub_heartbeat.try_recv() {
             let change = monitor.heard(Instant::now());
-            if let (Some(_), Some(bytes)) = (&change, &replace_ack) {
+            // The shore that sent this mission may still be reconnecting to
+            // this new bridge: its ack, once sent, goes again to every shore
+            // heard anew.
+            if change.is_some()
+                && let Some(Some(bytes)) = cfg.replaced_by.and_then(|id| answered.get(&id))
+            {
                 let _ = pub_ack.put(bytes.clone()).wait();
             }
             match change {
