@@ -41,6 +41,8 @@ enum Command {
     Montecarlo(cli::montecarlo::Args),
     /// Gap to the optimum and solve time of each algorithm on a folder of instances.
     Quality(cli::quality::Args),
+    /// How decode time, the PSO budget, auto's gap and the exact solver's gap grow with the network's size.
+    Scaling(cli::scaling::Args),
     /// Print the layout of every message on the wire (JSON: sizes, offsets, enum codes, topics, QoS).
     WireLayout(cli::wire_layout::Args),
     /// Summarise a mission.mcap: channels, message counts, time span, plans, final pose, outcome.
@@ -62,6 +64,7 @@ fn main() -> ExitCode {
         Command::ConvertOp(args) => cli::convert_op::run(args),
         Command::Montecarlo(args) => cli::montecarlo::run(args),
         Command::Quality(args) => cli::quality::run(args),
+        Command::Scaling(args) => cli::scaling::run(args),
         Command::WireLayout(args) => cli::wire_layout::run(args),
         Command::Replay(args) => cli::replay::run(args),
     };

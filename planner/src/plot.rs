@@ -141,6 +141,101 @@ fn draw_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, panel: &Panel<'_>) -> R
         .map_err(|e| e.to_string())
 }
 
+/// One line of an x–y panel: a label and its points (x ascending or not;
+/// several points may share an x).
+pub struct XySeries<'a> {
+    /// Legend label.
+    pub label: &'a str,
+    /// (x, y) points.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// One panel of an x–y figure.
+pub struct XyPanel<'a> {
+    /// Y axis label with its unit.
+    pub y_label: &'a str,
+    /// The lines to draw.
+    pub series: Vec<XySeries<'a>>,
+}
+
+/// Writes a figure of stacked x–y panels sharing the x axis `x_label`:
+/// every point as a marker, each series' line through the mean of its
+/// points at each x.
+pub fn xy_figure(path: &Path, title: &str, x_label: &str, panels: &[XyPanel<'_>]) -> Result<(), PlotError> {
+    let all = || {
+        panels
+            .iter()
+            .flat_map(|p| p.series.iter().flat_map(|s| s.points.iter()))
+    };
+    if all().next().is_none() {
+        return Err(PlotError::Empty(path.display().to_string()));
+    }
+    let x_hi = all().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+    let height = 60 + 260 * panels.len() as u32;
+    register_font();
+    let root = SVGBackend::new(path, (900, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
+    let root = root.titled(title, ("sans-serif", 22)).map_err(|e| draw_err(path, e))?;
+    let areas = root.split_evenly((panels.len(), 1));
+    for (area, panel) in areas.iter().zip(panels) {
+        draw_xy_panel(area, panel, x_label, x_hi * 1.05).map_err(|e| draw_err(path, e))?;
+    }
+    root.present().map_err(|e| draw_err(path, e))
+}
+
+fn draw_xy_panel(
+    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    panel: &XyPanel<'_>,
+    x_label: &str,
+    x_hi: f64,
+) -> Result<(), String> {
+    let ys = || panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
+    let lo = ys().fold(0.0f64, f64::min);
+    let hi = ys().fold(f64::NEG_INFINITY, f64::max);
+    let hi = if hi > lo { hi } else { lo + 1.0 };
+    let pad = (hi - lo) * 0.08;
+    let mut chart = ChartBuilder::on(area)
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0f64..x_hi, lo..(hi + pad))
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(panel.y_label)
+        .x_label_formatter(&|v| tick_label(*v))
+        .y_label_formatter(&|v| tick_label(*v))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (i, s) in panel.series.iter().enumerate() {
+        let colour = PALETTE[i % PALETTE.len()];
+        let mut xs: Vec<f64> = s.points.iter().map(|p| p.0).collect();
+        xs.sort_by(f64::total_cmp);
+        xs.dedup();
+        let means = xs.iter().map(|&x| {
+            let at: Vec<f64> = s.points.iter().filter(|p| p.0 == x).map(|p| p.1).collect();
+            (x, at.iter().sum::<f64>() / at.len() as f64)
+        });
+        chart
+            .draw_series(LineSeries::new(means, colour.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label(s.label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        chart
+            .draw_series(s.points.iter().map(|&p| Circle::new(p, 3, colour.filled())))
+            .map_err(|e| e.to_string())?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
 /// A dynamic waypoint's bound, drawn as an ellipse around its nominal
 /// position with the per-axis bounds as semi-axes.
 pub struct BoundMarker {
@@ -362,9 +457,25 @@ pub fn dashes(points: &[(f64, f64)], dash: f64) -> Vec<Vec<(f64, f64)>> {
     out
 }
 
+/// An axis tick at two decimals at most, without trailing zeros ("50", "2.5").
+fn tick_label(v: f64) -> String {
+    // Adding 0.0 turns −0 into +0.
+    let text = format!("{:.2}", v + 0.0);
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_drop_trailing_zeros() {
+        assert_eq!(tick_label(50.0), "50");
+        assert_eq!(tick_label(2.5), "2.5");
+        assert_eq!(tick_label(0.30000000000000004), "0.3");
+        assert_eq!(tick_label(-0.0), "0");
+        assert_eq!(tick_label(-12.25), "-12.25");
+    }
 
     struct Island;
     impl WaterMap for Island {

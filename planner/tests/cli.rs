@@ -1448,3 +1448,101 @@ fn bench_latency_refuses_a_bad_receiver_priority_before_starting_anything() {
         assert_input_error(&out, &[&format!("--receiver-rt-priority {value}"), "between 0 and 99"]);
     }
 }
+
+#[test]
+fn scaling_reports_every_column_per_instance_and_draws_them() {
+    let dir = scratch("scaling");
+    let csv = dir.join("s.csv");
+    let svg = dir.join("s.svg");
+    let files = format!("{DATA}/oplib/gen1/eil51-gen1-50.oplib,{DATA}/oplib/gen2/kroA200-gen2-50.oplib");
+    let run = |csv: &Path| {
+        let out = planner(&[
+            "scaling",
+            "--instances",
+            &files,
+            "--exact-time-limit",
+            "0.5",
+            "--repeats",
+            "2",
+            "--deadline-ms",
+            "5,10",
+            "--out",
+            path_str(csv),
+            "--plot",
+            path_str(&svg),
+        ]);
+        assert_ok(&out);
+        std::fs::read_to_string(csv).unwrap()
+    };
+    let table = run(&csv);
+    let mut lines = table.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "instance,nodes,class_nodes,edges,decode_ns,pso_ms,auto_5ms_score,auto_5ms_gap,auto_10ms_score,\
+             auto_10ms_gap,reference,reference_source,exact_proved,exact_s,exact_gap,snapshot_bytes"
+        )
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2, "{table}");
+    // Sorted by size; each in the smallest class that holds it.
+    assert_eq!(&rows[0][..4], &["eil51-gen1-50", "52", "64", "1326"]);
+    assert_eq!(&rows[1][..3], &["kroA200-gen2-50", "201", "256"]);
+    let oplib_best =
+        BestKnown::parse(&std::fs::read_to_string(format!("{DATA}/oplib/best_known.csv")).unwrap()).unwrap();
+    for r in &rows {
+        let reference: f64 = r[10].parse().unwrap();
+        // kroA200 has no entry in the test data: its reference is the best route these runs found.
+        match oplib_best.get(r[0]) {
+            Some(entry) => assert_eq!((reference, r[11]), (entry.score, "best_known"), "{r:?}"),
+            None => assert!(r[11] == "best_found" || r[11] == "exact", "{r:?}"),
+        }
+        for k in [6, 8] {
+            let score: f64 = r[k].parse().unwrap();
+            let gap: f64 = r[k + 1].parse().unwrap();
+            assert!(score <= reference, "{r:?}");
+            assert!((gap - 100.0 * (reference - score) / reference).abs() < 1e-3, "{r:?}");
+        }
+        assert!(
+            r[4].parse::<f64>().unwrap() > 0.0 && r[5].parse::<f64>().unwrap() > 0.0,
+            "{r:?}"
+        );
+    }
+    // The service's messages carry up to 128 waypoints.
+    assert!(rows[0][15].parse::<usize>().unwrap() > 0);
+    assert_eq!(rows[1][15], "not carried");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        text.contains("<svg") && text.contains("auto at 10 ms"),
+        "{}",
+        &text[..text.len().min(300)]
+    );
+    // Same seed, same routes: every score repeats (times may not).
+    let again = run(&dir.join("again.csv"));
+    let scores = |t: &str| -> Vec<String> {
+        t.lines()
+            .skip(1)
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                format!("{} {} {}", f[0], f[6], f[8])
+            })
+            .collect()
+    };
+    assert_eq!(scores(&table), scores(&again));
+}
+
+#[test]
+fn bad_input_scaling_names_the_missing_instance() {
+    let dir = scratch("scaling-bad");
+    let missing = dir.join("nothing-here.json");
+    assert_input_error(
+        &planner(&[
+            "scaling",
+            "--instances",
+            path_str(&missing),
+            "--out",
+            path_str(&dir.join("s.csv")),
+        ]),
+        &["--instances", "nothing-here.json", "no such file"],
+    );
+}

@@ -13,6 +13,7 @@ pub mod export;
 pub mod montecarlo;
 pub mod quality;
 pub mod replay;
+pub mod scaling;
 pub mod solve;
 pub mod wire_layout;
 

@@ -142,7 +142,7 @@ struct Row {
 }
 
 /// The objective's score of `e` as reported: weight or cost.
-fn score(inst: &Instance, e: &RouteEval) -> f64 {
+pub(crate) fn score(inst: &Instance, e: &RouteEval) -> f64 {
     match inst.objective {
         Objective::MaxWeight => e.weight,
         o @ Objective::PaperCost { .. } => e.cost(o, inst.time_available_s),
@@ -150,7 +150,7 @@ fn score(inst: &Instance, e: &RouteEval) -> f64 {
 }
 
 /// Gap of `score` to `optimum` in percent (never negative beyond rounding).
-fn gap_percent(objective: Objective, score: f64, optimum: f64, feasible: bool) -> f64 {
+pub(crate) fn gap_percent(objective: Objective, score: f64, optimum: f64, feasible: bool) -> f64 {
     if !feasible {
         return 100.0;
     }
@@ -166,7 +166,7 @@ fn gap_percent(objective: Objective, score: f64, optimum: f64, feasible: bool) -
 }
 
 /// The first `best_known.csv` in `dir` or above it.
-fn best_known(dir: &Path) -> Result<Option<BestKnown>, CliError> {
+pub(crate) fn best_known(dir: &Path) -> Result<Option<BestKnown>, CliError> {
     let start = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
     for d in start.ancestors() {
         let path = d.join("best_known.csv");
@@ -182,7 +182,7 @@ fn best_known(dir: &Path) -> Result<Option<BestKnown>, CliError> {
 
 /// Reads an instance: JSON in the interchange format, or a classic
 /// orienteering `.txt` or OPLib `.oplib` file converted on the fly.
-fn load(path: &Path) -> Result<(String, Instance), CliError> {
+pub(crate) fn load(path: &Path) -> Result<(String, Instance), CliError> {
     let file = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
     if let Some(inst) = super::load_benchmark(path) {
         Ok((instance_name(file).to_owned(), inst?))
@@ -200,7 +200,7 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
 }
 
 /// Parses `--exact-time-limit` (seconds, finite, > 0, at most a day).
-fn parse_seconds(flag: &str, text: &str) -> Result<Duration, CliError> {
+pub(crate) fn parse_seconds(flag: &str, text: &str) -> Result<Duration, CliError> {
     match text.trim().parse::<f64>() {
         Ok(s) if s.is_finite() && s > 0.0 && s <= 86_400.0 => Ok(Duration::from_secs_f64(s)),
         _ => Err(CliError::Usage(format!(
@@ -306,7 +306,7 @@ fn measure<const W: usize>(
 /// [`solver::run`], the clock chosen here); returns the solve time on that
 /// clock and, in `trace`, the time of every improvement of the best-so-far
 /// with its figures (the anytime curve).
-fn solve_timed<const W: usize>(
+pub(crate) fn solve_timed<const W: usize>(
     s: &mut dyn Solver<W>,
     problem: &Problem<W>,
     rng: &mut PlannerRng,
