@@ -80,14 +80,26 @@ pub fn per_run_figure(path: &Path, title: &str, panels: &[Panel<'_>]) -> Result<
     if panels.is_empty() || panels.iter().all(|p| p.series.iter().all(|s| s.values.is_empty())) {
         return Err(PlotError::Empty(path.display().to_string()));
     }
-    let height = 60 + 300 * panels.len() as u32;
+    stacked_figure(path, title, 300, panels, draw_panel)
+}
+
+/// Writes `panels` one above the other, each `panel_height` px high, under
+/// `title`, drawing each with `draw`.
+fn stacked_figure<P>(
+    path: &Path,
+    title: &str,
+    panel_height: u32,
+    panels: &[P],
+    draw: impl Fn(&DrawingArea<SVGBackend<'_>, Shift>, &P) -> Result<(), String>,
+) -> Result<(), PlotError> {
+    let height = 60 + panel_height * panels.len() as u32;
     register_font();
     let root = SVGBackend::new(path, (900, height)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(|e| draw_err(path, e))?;
     let areas = root.split_evenly((panels.len(), 1));
     for (area, panel) in areas.iter().zip(panels) {
-        draw_panel(area, panel).map_err(|e| draw_err(path, e))?;
+        draw(area, panel).map_err(|e| draw_err(path, e))?;
     }
     root.present().map_err(|e| draw_err(path, e))
 }
@@ -171,16 +183,9 @@ pub fn xy_figure(path: &Path, title: &str, x_label: &str, panels: &[XyPanel<'_>]
         return Err(PlotError::Empty(path.display().to_string()));
     }
     let x_hi = all().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-    let height = 60 + 260 * panels.len() as u32;
-    register_font();
-    let root = SVGBackend::new(path, (900, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
-    let root = root.titled(title, ("sans-serif", 22)).map_err(|e| draw_err(path, e))?;
-    let areas = root.split_evenly((panels.len(), 1));
-    for (area, panel) in areas.iter().zip(panels) {
-        draw_xy_panel(area, panel, x_label, x_hi * 1.05).map_err(|e| draw_err(path, e))?;
-    }
-    root.present().map_err(|e| draw_err(path, e))
+    stacked_figure(path, title, 260, panels, |area, panel| {
+        draw_xy_panel(area, panel, x_label, x_hi * 1.05)
+    })
 }
 
 fn draw_xy_panel(
