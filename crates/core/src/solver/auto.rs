@@ -124,8 +124,10 @@ pub struct AutoSettings {
     /// ([`LocalSearch::improve_first`]) while the search is young (fewer
     /// than `young_restarts` returns to the best). 64: the 100–127-city
     /// OPLib files gained (gen1 at 20 ms, 10 seeds: mean gap 2.44 → 2.10 %),
-    /// and first improvement on the sparse 100–128-node Bay of Islands
-    /// networks lost 2–3 % of their score there.
+    /// and on the sparse 100–128-node Bay of Islands networks first
+    /// improvement looked worse at 20 ms (bi100-mw −2.1 %, bi128-pc −3.2 %
+    /// of score, 3 seeds; about the noise of two runs of one binary there),
+    /// so sparse networks keep best improvement.
     pub first_above: usize,
     /// Returns to the best after which the search is no longer young. 1:
     /// first improvement for the whole search lost at 1000 ms in an earlier
