@@ -36,7 +36,14 @@
 //!
 //! Kicks are polished with the cheap moves ([`LocalSearch::improve`]);
 //! every new best route also gets the deep polish (or-opt, swap, pair
-//! insertion: [`LocalSearch::improve_deep`]). One step stays well under a
+//! insertion: [`LocalSearch::improve_deep`]), under `max_weight` only once
+//! it has stood [`AutoSettings::deep_after`] kicks (early in a search new
+//! bests come nearly every kick, and deep-polishing each one took most of
+//! a 20 ms solve on 100-city OPLib files). On dense networks above
+//! [`AutoSettings::first_above`] nodes a young search (before its first
+//! return to the best) polishes kicks by first improvement
+//! ([`LocalSearch::improve_first`]): more kicks while they still find new
+//! bests, the full polish once they stop. One step stays well under a
 //! millisecond on 40-node snapshots (measured max 0.4–0.7 ms); on the
 //! 64–66-node classic instances with long routes a deep polish can take
 //! 2–3 ms, which is how far past a deadline a solve may end there.
@@ -112,6 +119,26 @@ pub struct AutoSettings {
     /// rerouting too ([`Moves::reroute`], see [`REROUTE_MAX_DENSITY`]). No
     /// effect under `max_weight`.
     pub reroute: bool,
+    /// Dense networks (edge density above [`REROUTE_MAX_DENSITY`]) of more
+    /// than this many nodes polish kicks with first improvement
+    /// ([`LocalSearch::improve_first`]) while the search is young (fewer
+    /// than `young_restarts` returns to the best). 64: the 100–127-city
+    /// OPLib files gained (gen1 at 20 ms, 10 seeds: mean gap 2.44 → 2.10 %),
+    /// and on the sparse 100–128-node Bay of Islands networks first
+    /// improvement looked worse at 20 ms (bi100-mw −2.1 %, bi128-pc −3.2 %
+    /// of score, 3 seeds; about the noise of two runs of one binary there),
+    /// so sparse networks keep best improvement.
+    pub first_above: usize,
+    /// Returns to the best after which the search is no longer young. 1:
+    /// first improvement for the whole search lost at 1000 ms in an earlier
+    /// measurement (OPLib 34 → 31 of 46 at the best-known score).
+    pub young_restarts: u32,
+    /// Under `max_weight`, new best routes get the cheap polish and the
+    /// deep one runs on the best once it has stood this many kicks (0:
+    /// deep polish at once, as under `paper_cost`, where deferring it lost
+    /// on a held-out dense family at 20 ms). 5: OPLib gen1 at 20 ms, 10
+    /// seeds, 111 → 123 of 230 solves at the best-known score.
+    pub deep_after: u32,
 }
 
 impl Default for AutoSettings {
@@ -132,6 +159,9 @@ impl Default for AutoSettings {
             deep_polish_max_n: MAX_NODES,
             or_opt_segment: 1,
             reroute: true,
+            first_above: 64,
+            young_restarts: 1,
+            deep_after: 5,
         }
     }
 }
@@ -168,6 +198,14 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     /// Whether routes are polished by rerouting (sparse networks only, see
     /// [`REROUTE_MAX_DENSITY`]).
     reroute_polish: bool,
+    /// Whether `best` has had the deep polish.
+    best_deep: bool,
+    /// Whether new bests wait [`AutoSettings::deep_after`] kicks for their
+    /// deep polish (objectives that do not value time only).
+    defer_deep: bool,
+    /// Whether kicks of a young search are polished by first improvement
+    /// (dense networks above [`AutoSettings::first_above`] nodes).
+    first_polish: bool,
 }
 
 impl<const W: usize> Auto<W> {
@@ -195,6 +233,9 @@ impl<const W: usize> Auto<W> {
             rerouting: false,
             reroute_every: 2,
             reroute_polish: false,
+            best_deep: true,
+            first_polish: false,
+            defer_deep: false,
         }
     }
 
@@ -209,7 +250,9 @@ impl<const W: usize> Auto<W> {
     fn offer(&mut self, p: &Problem<W>, route: &Route<W>, e: RouteEval) -> bool {
         if p.better(&e, &self.best_eval) {
             let (mut r, mut e) = (*route, e);
-            let deep = self.settings.deep_polish_max_n >= p.n();
+            let deep_ok = self.settings.deep_polish_max_n >= p.n();
+            let deep = deep_ok && !self.defer_deep;
+            self.best_deep = deep || !deep_ok;
             let changed = if deep {
                 self.ls.improve_deep(p, &mut r, &mut e, self.settings.polish_passes)
             } else {
@@ -227,6 +270,25 @@ impl<const W: usize> Auto<W> {
         false
     }
 
+    /// The deep polish of a best route that got only the cheap one when it
+    /// was found: it runs once the route has stood `deep_after` kicks.
+    fn deep_polish_best(&mut self, p: &Problem<W>) {
+        self.best_deep = true;
+        let (mut r, mut e) = (self.best, self.best_eval);
+        let changed = self.ls.improve_deep(p, &mut r, &mut e, self.settings.polish_passes);
+        let changed = self.reroute_polish(p, &mut r, &mut e, true) || changed;
+        if changed && p.better(&e, &self.best_eval) {
+            self.best = r;
+            self.best_eval = e;
+            if p.better(&e, &self.cur_eval) {
+                self.cur = r;
+                self.cur_eval = e;
+            }
+            self.stale = 0;
+            self.ruin_cap = self.settings.ruin_min;
+        }
+    }
+
     /// Rebuilds `trial` after a ruin: shorten, refill (the removed nodes
     /// barred first, so the route changes), shorten, refill, polish.
     fn recreate(&mut self, p: &Problem<W>, e: &mut RouteEval, barred: NodeSet<W>, rng: &mut PlannerRng) {
@@ -237,7 +299,12 @@ impl<const W: usize> Auto<W> {
         if self.moves.shorten(p, &mut self.trial, e, SHORTEN_ROUNDS, seg) {
             self.moves.fill(p, &mut self.trial, e, NodeSet::EMPTY, 0.0, rng);
         }
-        self.ls.improve(p, &mut self.trial, e, self.settings.polish_passes);
+        if self.first_polish && self.restarts < self.settings.young_restarts {
+            self.ls
+                .improve_first(p, &mut self.trial, e, self.settings.polish_passes);
+        } else {
+            self.ls.improve(p, &mut self.trial, e, self.settings.polish_passes);
+        }
         let mut trial = self.trial;
         self.reroute_polish(p, &mut trial, e, false);
         self.trial = trial;
@@ -297,6 +364,9 @@ impl<const W: usize> Auto<W> {
             self.ruin_cap = self.settings.ruin_min;
         } else {
             self.stale += 1;
+            if !self.best_deep && self.stale >= self.settings.deep_after {
+                self.deep_polish_best(p);
+            }
             if self.stale.is_multiple_of(self.settings.grow_every.max(1)) {
                 self.ruin_cap = (self.ruin_cap + 1).min(self.settings.ruin_max.max(2));
             }
@@ -404,6 +474,11 @@ impl<const W: usize> Solver<W> for Auto<W> {
         self.reroute_polish = self.rerouting && sparse;
         self.reroute_every = if sparse { 2 } else { 4 };
         self.ruin_cap = self.settings.ruin_min;
+        self.best_deep = true;
+        // On sparse networks the cheap polish is cheap already (few common
+        // neighbours), and first improvement only cost quality there.
+        self.first_polish = problem.n() > self.settings.first_above && !sparse;
+        self.defer_deep = self.settings.deep_after > 0 && !Value::of(problem).values_time();
     }
 
     fn step(&mut self, problem: &Problem<W>, rng: &mut PlannerRng) -> bool {

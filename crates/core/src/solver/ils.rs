@@ -111,8 +111,11 @@ impl<const W: usize> Moves<W> {
                 let mut j = i + 1;
                 while j < len - 1 {
                     let (ui, uj, b) = (route.get(i), route.get(j), route.get(j + 1));
-                    if p.has_edge(a, uj) && p.has_edge(ui, b) {
-                        let dt = p.time_s(a, uj) + p.time_s(ui, b) - p.time_s(a, ui) - p.time_s(uj, b);
+                    // `accept` never takes a move that lengthens the route,
+                    // so the time table alone rules most reversals out
+                    // before the larger edge records are read.
+                    let dt = p.time_s(a, uj) + p.time_s(ui, b) - p.time_s(a, ui) - p.time_s(uj, b);
+                    if dt <= EPS && p.has_edge(a, uj) && p.has_edge(ui, b) {
                         let dw = ew(a, uj) + ew(ui, b) - ew(a, ui) - ew(uj, b);
                         let dr = p.risk_ratio(a, uj) + p.risk_ratio(ui, b) - p.risk_ratio(a, ui) - p.risk_ratio(uj, b);
                         if accept(dt, v.static_delta(dw, dr)) {
@@ -148,6 +151,7 @@ impl<const W: usize> Moves<W> {
         let len = route.len();
         let ew = |a: usize, b: usize| p.gain(a, b) - p.prize(b);
         let fig = |a: usize, b: usize| (p.time_s(a, b), ew(a, b), p.risk_ratio(a, b));
+        let wr = |a: usize, b: usize| (ew(a, b), p.risk_ratio(a, b));
         for l in 1..=max_segment {
             for i in 1..len.saturating_sub(l) {
                 let (a, b) = (route.get(i - 1), route.get(i + l));
@@ -162,19 +166,21 @@ impl<const W: usize> Moves<W> {
                         continue;
                     }
                     let (c, d) = (route.get(k), route.get(k + 1));
-                    let cd = fig(c, d);
+                    let t_cd = p.time_s(c, d);
                     for rev in [false, true] {
                         if rev && l == 1 {
                             break;
                         }
                         let (x, y) = if rev { (t, h) } else { (h, t) };
-                        if !(p.has_edge(c, x) && p.has_edge(y, d)) {
+                        // Times first, as in the 2-opt sweep: a move that
+                        // lengthens the route is never accepted.
+                        let dt = p.time_s(c, x) + p.time_s(y, d) - t_cd - out.0;
+                        if dt > EPS || !(p.has_edge(c, x) && p.has_edge(y, d)) {
                             continue;
                         }
-                        let (cx, yd) = (fig(c, x), fig(y, d));
-                        let dt = cx.0 + yd.0 - cd.0 - out.0;
-                        let dw = cx.1 + yd.1 - cd.1 - out.1;
-                        let dr = cx.2 + yd.2 - cd.2 - out.2;
+                        let (cx, yd, cd) = (wr(c, x), wr(y, d), wr(c, d));
+                        let dw = cx.0 + yd.0 - cd.0 - out.1;
+                        let dr = cx.1 + yd.1 - cd.1 - out.2;
                         if accept(dt, v.static_delta(dw, dr)) {
                             route.relocate(i, l, k, rev);
                             return true;
