@@ -94,11 +94,13 @@ fn max_weight_on_oplib_files_stays_near_the_published_optima() {
     assert!(worst <= WORST_BOUND_MW, "worst gap {worst:.2} %");
 }
 
-#[test]
-fn paper_cost_stays_near_the_proved_optimum() {
+/// Gaps in % of `auto`'s cost after [`STEPS`] steps to the exact solver's
+/// proved optimum, on `paper_cost` versions of six small random networks of
+/// `n` nodes and edge probability `density`.
+fn paper_cost_gaps(n: usize, density: f64, budget_s: f64) -> Vec<f64> {
     let mut gaps = Vec::new();
     for seed in 0..6 {
-        let mut inst = random_instance(14, 0.6, 9_000.0, seed);
+        let mut inst = random_instance(n, density, budget_s, seed);
         inst.objective = Objective::PaperCost { phi1: 0.01, phi2: 1.0 };
         let p: Problem = Problem::from_instance(&inst).unwrap();
         let exact = solve_exact(&p, &ExactSettings::default()).unwrap();
@@ -115,8 +117,18 @@ fn paper_cost_stays_near_the_proved_optimum() {
         eprintln!("seed {seed}: cost {} against {optimum} (gap {gap:.2} %)", stats.cost);
         gaps.push(gap);
     }
+    gaps
+}
+
+/// Mean and worst of `gaps` (at least 0).
+fn mean_and_worst(gaps: &[f64]) -> (f64, f64) {
     let mean = gaps.iter().sum::<f64>() / gaps.len() as f64;
-    let worst = gaps.iter().copied().fold(0.0, f64::max);
+    (mean, gaps.iter().copied().fold(0.0, f64::max))
+}
+
+#[test]
+fn paper_cost_stays_near_the_proved_optimum() {
+    let (mean, worst) = mean_and_worst(&paper_cost_gaps(14, 0.6, 9_000.0));
     // Today: 6 of 6 at the optimum (before rerouting: 4 of 6, mean
     // 14.9 %, worst 82.4 %, seed 4 a two-edge route where the optimum takes
     // three). A planner that optimised weight instead of this cost fails it.
@@ -124,8 +136,27 @@ fn paper_cost_stays_near_the_proved_optimum() {
     assert!(worst <= WORST_BOUND_PC, "worst gap {worst:.2} %");
 }
 
+#[test]
+fn paper_cost_on_dense_networks_stays_near_the_proved_optimum() {
+    // Edge probability 0.95: above auto's density threshold, so this runs
+    // the dense networks' settings (no reroute polish, fewer reroute kicks,
+    // no shortening in the recreate step).
+    let (mean, worst) = mean_and_worst(&paper_cost_gaps(DENSE_N, 0.95, DENSE_BUDGET_S));
+    // Today: 4 of 6 at the optimum, mean 12.4 %, worst 55.2 % (seed 0);
+    // these routes must spend their budget to the second at a low risk,
+    // which dense networks make hard (see docs/quality.md).
+    assert!(mean <= MEAN_BOUND_PC_DENSE, "mean gap {mean:.2} %");
+    assert!(worst <= WORST_BOUND_PC_DENSE, "worst gap {worst:.2} %");
+}
+
+/// Size and budget of the dense `paper_cost` networks.
+const DENSE_N: usize = 16;
+const DENSE_BUDGET_S: f64 = 9_000.0;
+
 /// Bounds with a margin over today's figures (see each test).
 const MEAN_BOUND_MW: f64 = 3.5;
 const WORST_BOUND_MW: f64 = 12.0;
 const MEAN_BOUND_PC: f64 = 5.0;
 const WORST_BOUND_PC: f64 = 25.0;
+const MEAN_BOUND_PC_DENSE: f64 = 20.0;
+const WORST_BOUND_PC_DENSE: f64 = 70.0;

@@ -30,9 +30,10 @@
 //! consecutive nodes out, the best path of 0–2 others in between the same
 //! two route nodes), and every kick's result and new best route is
 //! polished by rerouting too ([`Moves::reroute`]). On dense networks
-//! ([`REROUTE_MAX_DENSITY`]) one kick in four reroutes and nothing is
-//! polished by rerouting. Under `max_weight` nothing of this runs (same
-//! routes, same random draws as without it).
+//! ([`REROUTE_MAX_DENSITY`]) one kick in four reroutes, nothing is
+//! polished by rerouting and the recreate step does not shorten
+//! ([`AutoSettings::dense_cost_shorten`]). Under `max_weight` nothing of
+//! this runs (same routes, same random draws as without it).
 //!
 //! Kicks are polished with the cheap moves ([`LocalSearch::improve`]);
 //! every new best route also gets the deep polish (or-opt, swap, pair
@@ -139,6 +140,15 @@ pub struct AutoSettings {
     /// on a held-out dense family at 20 ms). 5: OPLib gen1 at 20 ms, 10
     /// seeds, 111 → 123 of 230 solves at the best-known score.
     pub deep_after: u32,
+    /// Objectives that value time on dense networks (edge density above
+    /// [`REROUTE_MAX_DENSITY`]): whether the recreate step shortens the
+    /// route (2-opt, or-opt) around its refills. Off: shortening gives up
+    /// route time, which `paper_cost` pays for by the second, and on dense
+    /// networks the refills did not buy it back at a lower risk (`bc40-pc`,
+    /// 16 instances, 4 seeds: mean gap 32.0 → 19.8 % at 20 ms, 16.5 →
+    /// 10.4 % at 100 ms; held out `bc64-pc-perturbed` 54.8 → 29.4 %, 20.0 →
+    /// 2.3 %). Sparse networks and `max_weight` always shorten.
+    pub dense_cost_shorten: bool,
 }
 
 impl Default for AutoSettings {
@@ -162,6 +172,7 @@ impl Default for AutoSettings {
             first_above: 64,
             young_restarts: 1,
             deep_after: 5,
+            dense_cost_shorten: false,
         }
     }
 }
@@ -206,6 +217,8 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     /// Whether kicks of a young search are polished by first improvement
     /// (dense networks above [`AutoSettings::first_above`] nodes).
     first_polish: bool,
+    /// Whether the recreate step shortens ([`AutoSettings::dense_cost_shorten`]).
+    shorten: bool,
 }
 
 impl<const W: usize> Auto<W> {
@@ -236,6 +249,7 @@ impl<const W: usize> Auto<W> {
             best_deep: true,
             first_polish: false,
             defer_deep: false,
+            shorten: true,
         }
     }
 
@@ -290,13 +304,16 @@ impl<const W: usize> Auto<W> {
     }
 
     /// Rebuilds `trial` after a ruin: shorten, refill (the removed nodes
-    /// barred first, so the route changes), shorten, refill, polish.
+    /// barred first, so the route changes), shorten, refill, polish; without
+    /// the shortening where [`AutoSettings::dense_cost_shorten`] turns it off.
     fn recreate(&mut self, p: &Problem<W>, e: &mut RouteEval, barred: NodeSet<W>, rng: &mut PlannerRng) {
         let (noise, seg) = (self.settings.noise, self.settings.or_opt_segment);
-        self.moves.shorten(p, &mut self.trial, e, SHORTEN_ROUNDS, seg);
+        if self.shorten {
+            self.moves.shorten(p, &mut self.trial, e, SHORTEN_ROUNDS, seg);
+        }
         self.moves.fill(p, &mut self.trial, e, barred, noise, rng);
         self.moves.fill(p, &mut self.trial, e, NodeSet::EMPTY, noise, rng);
-        if self.moves.shorten(p, &mut self.trial, e, SHORTEN_ROUNDS, seg) {
+        if self.shorten && self.moves.shorten(p, &mut self.trial, e, SHORTEN_ROUNDS, seg) {
             self.moves.fill(p, &mut self.trial, e, NodeSet::EMPTY, 0.0, rng);
         }
         if self.first_polish && self.restarts < self.settings.young_restarts {
@@ -440,7 +457,9 @@ const REROUTE_ROUNDS: u32 = 8;
 /// reroute kick in four without the polish did best (mean gap 53 → 39 %,
 /// 22 → 14 %, 7.1 → 3.3 % at 20, 100, 1000 ms). 0.75: between the two (the
 /// small random networks of the quality regression test, edge probability
-/// 0.6 plus a connecting path, count as sparse).
+/// 0.6 plus a connecting path, count as sparse). Above it the recreate step
+/// of those objectives does not shorten either
+/// ([`AutoSettings::dense_cost_shorten`]).
 const REROUTE_MAX_DENSITY: f64 = 0.75;
 
 impl<const W: usize> Default for Auto<W> {
@@ -470,15 +489,17 @@ impl<const W: usize> Solver<W> for Auto<W> {
         let degrees: u32 = (0..problem.n()).map(|u| problem.neighbours(u).len()).sum();
         let pairs = (problem.n() * problem.n().saturating_sub(1)).max(1) as f64;
         let sparse = degrees as f64 <= REROUTE_MAX_DENSITY * pairs;
-        self.rerouting = self.settings.reroute && Value::of(problem).values_time();
+        let values_time = Value::of(problem).values_time();
+        self.rerouting = self.settings.reroute && values_time;
         self.reroute_polish = self.rerouting && sparse;
         self.reroute_every = if sparse { 2 } else { 4 };
+        self.shorten = sparse || !values_time || self.settings.dense_cost_shorten;
         self.ruin_cap = self.settings.ruin_min;
         self.best_deep = true;
         // On sparse networks the cheap polish is cheap already (few common
         // neighbours), and first improvement only cost quality there.
         self.first_polish = problem.n() > self.settings.first_above && !sparse;
-        self.defer_deep = self.settings.deep_after > 0 && !Value::of(problem).values_time();
+        self.defer_deep = self.settings.deep_after > 0 && !values_time;
     }
 
     fn step(&mut self, problem: &Problem<W>, rng: &mut PlannerRng) -> bool {
@@ -573,5 +594,45 @@ mod tests {
             checked += 1;
         }
         assert!(checked >= 6);
+    }
+
+    /// The route of `settings` after 30 steps on `inst`.
+    fn route_of(inst: &crate::instance::Instance, settings: AutoSettings) -> Vec<usize> {
+        let p = Problem::from_instance(inst).unwrap();
+        let mut s = Auto::new(settings);
+        run(&mut s, &p, &mut PlannerRng::new(7), None, Budget::iterations(30));
+        s.best().0.to_vec()
+    }
+
+    #[test]
+    fn dense_cost_shorten_acts_on_dense_paper_cost_only() {
+        use crate::instance::Objective;
+        let on = AutoSettings {
+            dense_cost_shorten: true,
+            ..AutoSettings::default()
+        };
+        let cost = Objective::PaperCost { phi1: 0.01, phi2: 1.0 };
+        let mut differed = 0;
+        for seed in 0..4 {
+            // Dense max_weight and sparse paper_cost: the same routes either way.
+            let dense = random_instance(30, 0.95, 31_000.0, seed);
+            assert_eq!(
+                route_of(&dense, on),
+                route_of(&dense, AutoSettings::default()),
+                "seed {seed}"
+            );
+            let mut sparse = random_instance(30, 0.4, 31_000.0, seed);
+            sparse.objective = cost;
+            assert_eq!(
+                route_of(&sparse, on),
+                route_of(&sparse, AutoSettings::default()),
+                "seed {seed}"
+            );
+            let mut dense_cost = dense;
+            dense_cost.objective = cost;
+            differed += usize::from(route_of(&dense_cost, on) != route_of(&dense_cost, AutoSettings::default()));
+        }
+        // Dense paper_cost: the setting is live there.
+        assert!(differed > 0);
     }
 }
