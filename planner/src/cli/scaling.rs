@@ -236,21 +236,16 @@ fn measure<const W: usize>(
         },
     );
     // The best route any run found, and the exact solver's verdict on it.
-    let mut best = solves
-        .iter()
-        .map(|s| s.1)
-        .filter(|e| e.feasible)
-        .fold(None, |b: Option<RouteEval>, e| {
-            Some(match b {
-                Some(b) if !problem.better(&e, &b) => b,
-                _ => e,
-            })
-        });
+    let mut best: Option<RouteEval> = None;
+    let mut offer = |e: &RouteEval| {
+        if e.feasible && best.is_none_or(|b| problem.better(e, &b)) {
+            best = Some(*e);
+        }
+    };
+    solves.iter().for_each(|s| offer(&s.1));
     let (exact_proved, exact_s, bound) = match &exact {
         Ok(out) => {
-            if best.is_none_or(|b| problem.better(&out.eval, &b)) {
-                best = Some(out.eval);
-            }
+            offer(&out.eval);
             (out.proved_optimal, out.elapsed.as_secs_f64(), Some(out.bound))
         }
         Err(_) => (false, exact_limit.as_secs_f64(), None),
@@ -293,6 +288,11 @@ fn measure<const W: usize>(
     })
 }
 
+/// The snapshot column: bytes, or "not carried" above the service's class.
+fn snapshot_text(bytes: Option<usize>) -> String {
+    bytes.map_or_else(|| "not carried".to_owned(), |b| b.to_string())
+}
+
 fn csv(rows: &[Row], deadlines: &[u64]) -> String {
     let mut s = String::from("instance,nodes,class_nodes,edges,decode_ns,pso_ms");
     for d in deadlines {
@@ -316,8 +316,7 @@ fn csv(rows: &[Row], deadlines: &[u64]) -> String {
             r.exact_proved,
             r.exact_s,
             r.exact_gap,
-            r.snapshot_bytes
-                .map_or_else(|| "not carried".to_owned(), |b| b.to_string())
+            snapshot_text(r.snapshot_bytes)
         );
     }
     s
@@ -352,13 +351,7 @@ fn table(rows: &[Row], deadlines: &[u64]) -> String {
         } else {
             format!("gap {:.1} % ({:.0} s)", r.exact_gap, r.exact_s)
         };
-        let _ = writeln!(
-            s,
-            "  {:<22} {:>12}",
-            exact,
-            r.snapshot_bytes
-                .map_or_else(|| "not carried".to_owned(), |b| b.to_string())
-        );
+        let _ = writeln!(s, "  {:<22} {:>12}", exact, snapshot_text(r.snapshot_bytes));
     }
     s
 }

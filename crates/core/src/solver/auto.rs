@@ -267,12 +267,7 @@ impl<const W: usize> Auto<W> {
             let deep_ok = self.settings.deep_polish_max_n >= p.n();
             let deep = deep_ok && !self.defer_deep;
             self.best_deep = deep || !deep_ok;
-            let changed = if deep {
-                self.ls.improve_deep(p, &mut r, &mut e, self.settings.polish_passes)
-            } else {
-                self.ls.improve(p, &mut r, &mut e, self.settings.polish_passes)
-            };
-            let changed = self.reroute_polish(p, &mut r, &mut e, deep) || changed;
+            let changed = self.polish_best(p, &mut r, &mut e, deep);
             if changed && p.better(&e, &self.cur_eval) {
                 self.cur = r;
                 self.cur_eval = e;
@@ -284,13 +279,23 @@ impl<const W: usize> Auto<W> {
         false
     }
 
+    /// The polish of a best route: the local search (deep or cheap), then
+    /// rerouting; returns whether the route changed.
+    fn polish_best(&mut self, p: &Problem<W>, r: &mut Route<W>, e: &mut RouteEval, deep: bool) -> bool {
+        let changed = if deep {
+            self.ls.improve_deep(p, r, e, self.settings.polish_passes)
+        } else {
+            self.ls.improve(p, r, e, self.settings.polish_passes)
+        };
+        self.reroute_polish(p, r, e, deep) || changed
+    }
+
     /// The deep polish of a best route that got only the cheap one when it
     /// was found: it runs once the route has stood `deep_after` kicks.
     fn deep_polish_best(&mut self, p: &Problem<W>) {
         self.best_deep = true;
         let (mut r, mut e) = (self.best, self.best_eval);
-        let changed = self.ls.improve_deep(p, &mut r, &mut e, self.settings.polish_passes);
-        let changed = self.reroute_polish(p, &mut r, &mut e, true) || changed;
+        let changed = self.polish_best(p, &mut r, &mut e, true);
         if changed && p.better(&e, &self.best_eval) {
             self.best = r;
             self.best_eval = e;
