@@ -14,7 +14,9 @@
 //! reference is proved). The exact solver starts from `auto`'s route at the
 //! longest deadline and proves the objective value only (what the gaps
 //! compare). Each instance runs on the smallest capacity class that holds
-//! it. The same seed gives the same routes; the times vary with the machine.
+//! it. The seed fixes the decoded vectors and the PSO budget's routes;
+//! `auto`'s route at a deadline depends on how many steps fit in it, so its
+//! score (like every time) may move between runs.
 //! One CSV row per instance; `--plot` draws the columns against the node
 //! count.
 
