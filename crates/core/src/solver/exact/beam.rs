@@ -60,6 +60,10 @@ pub(super) fn beam<const W: usize>(
         next.clear();
         let mut derived: Vec<Vec<Level<W>>> = Vec::with_capacity(beam.len());
         for (i, m) in beam.iter().enumerate() {
+            // A level bounds up to width × degree children: seconds at 400 nodes.
+            if search.past_deadline() {
+                return;
+            }
             let parent_lvls = &member_levels[m.parent];
             let mut lvls = vec![Level::default(); parent_lvls.len()];
             for (child, parent) in lvls.iter_mut().zip(parent_lvls) {

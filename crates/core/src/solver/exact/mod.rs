@@ -253,6 +253,8 @@ pub fn solve_exact<const W: usize>(
         memo: Memo::new(memo_bits(n)),
         deadline: settings.time_limit.map(|d| t0 + d),
         node_limit: settings.node_limit.unwrap_or(u64::MAX),
+        work: 0,
+        next_clock_read: 0,
         aborted: false,
         open_bound: f64::NEG_INFINITY,
     };

@@ -382,3 +382,95 @@ fn hull_keeps_only_the_rising_concave_chain() {
     assert_eq!(out[0].slope, f64::INFINITY);
     assert_eq!(out.len(), 2);
 }
+
+/// Every route one polish move away from `r`, built position by position
+/// (the reference the polish's edge deltas must agree with).
+fn one_move_away(p: &Problem, r: &Route) -> Vec<Route> {
+    let c: Vec<usize> = r.iter().collect();
+    let len = c.len();
+    let free: Vec<usize> = p.free_nodes(r).iter().collect();
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for i in 0..len - 1 {
+        for &v in &free {
+            let mut x = c.clone();
+            x.insert(i + 1, v);
+            out.push(x);
+        }
+    }
+    for i in 1..len - 1 {
+        for &v in &free {
+            let mut x = c.clone();
+            x[i] = v;
+            out.push(x);
+        }
+        let mut x = c.clone();
+        x.remove(i);
+        out.push(x);
+        for j in i + 1..len - 1 {
+            let mut x = c.clone();
+            x[i..=j].reverse();
+            out.push(x);
+            let mut x = c.clone();
+            x.swap(i, j);
+            out.push(x);
+        }
+        for j in 1..len - 1 {
+            if j != i {
+                let mut x = c.clone();
+                let v = x.remove(i);
+                x.insert(j, v);
+                out.push(x);
+            }
+        }
+    }
+    out.iter().filter_map(|x| Route::from_slice(x)).collect()
+}
+
+#[test]
+fn polish_ends_where_no_single_move_improves_the_route() {
+    let mut polished = 0;
+    for (k, n) in (4..=24).enumerate() {
+        for (density, budget) in [(0.5, 20_000.0), (1.0, 14_000.0), (0.8, 40_000.0)] {
+            let seed = 500 + 3 * k as u64;
+            let mut inst = random_instance(n, density, budget, seed);
+            if k % 2 == 1 {
+                for (i, node) in inst.nodes.iter_mut().enumerate() {
+                    node.prize = (i * 5 % 7) as f64;
+                }
+            }
+            for objective in [Objective::MaxWeight, Objective::PaperCost { phi1: 0.01, phi2: 1.0 }] {
+                inst.objective = objective;
+                let Ok(p) = Problem::from_instance(&inst) else { continue };
+                let Some(start) = p.quickest_route() else { continue };
+                let Some(e0) = p.evaluate(&start).filter(|e| e.feasible) else {
+                    continue;
+                };
+                let (r, e) = polish::polish(&p, start, e0, || false);
+                assert_eq!(p.evaluate(&r), Some(e), "figures of the polished route");
+                assert!(
+                    e.feasible && !p.better(&e0, &e),
+                    "{} n={n}: worse than its start",
+                    inst.name
+                );
+                for x in one_move_away(&p, &r) {
+                    if let Some(ex) = p.evaluate(&x).filter(|ex| ex.feasible) {
+                        let margin = 1e-7 * p.score(&e).abs().max(1.0);
+                        assert!(
+                            p.score(&ex) <= p.score(&e) + margin,
+                            "n={n} {objective:?}: {:?} (score {}) improves on the polished {:?} (score {})",
+                            x.to_vec(),
+                            p.score(&ex),
+                            r.to_vec(),
+                            p.score(&e)
+                        );
+                    }
+                }
+                polished += usize::from(r != start);
+            }
+        }
+    }
+    assert!(
+        polished > 40,
+        "only {polished} routes changed: the test would not see a wrong delta"
+    );
+}
