@@ -298,6 +298,49 @@ mod avx512 {
     }
 }
 
+/// The AVX2 scan, written with intrinsics: left to itself the compiler
+/// turned [`best_key`] into a compare and a branch per column on AVX2 (no
+/// faster than the portable copy). Eight columns a compare, two registers
+/// in flight; visited keys are [`NO_KEY`] as in the portable copy. Same
+/// maxima as [`best_key`]. (A joint reduction of the eight walks' registers,
+/// as on AVX-512, measured no faster here.)
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use core::arch::x86_64::*;
+
+    use super::{NO_KEY, SCAN_BLOCK};
+
+    /// The best key of one row (see [`super::best_key`]).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(super) fn best_key(reach: &[f32], key: &[i32], slack: f32, len: usize) -> i32 {
+        // The loads below rely on this (raw pointers, no bounds checks).
+        assert!(len <= reach.len() && len <= key.len() && len.is_multiple_of(SCAN_BLOCK));
+        const _: () = assert!(SCAN_BLOCK == 16, "one block is two registers of eight");
+        // SAFETY: base + 16 ≤ len ≤ both lengths (asserted above).
+        unsafe {
+            let s = _mm256_set1_ps(slack);
+            let none = _mm256_set1_epi32(NO_KEY);
+            let (mut a0, mut a1) = (none, none);
+            let mut base = 0;
+            while base < len {
+                let (r, k) = (reach.as_ptr().add(base), key.as_ptr().add(base));
+                // All ones where reach ≤ slack (false for NaN, as `<=`).
+                let m0 = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_loadu_ps(r), s));
+                let m1 = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_loadu_ps(r.add(8)), s));
+                a0 = _mm256_max_epi32(a0, _mm256_blendv_epi8(none, _mm256_loadu_si256(k.cast()), m0));
+                a1 = _mm256_max_epi32(a1, _mm256_blendv_epi8(none, _mm256_loadu_si256(k.add(8).cast()), m1));
+                base += SCAN_BLOCK;
+            }
+            let a = _mm256_max_epi32(a0, a1);
+            let h = _mm_max_epi32(_mm256_castsi256_si128(a), _mm256_extracti128_si256::<1>(a));
+            let h = _mm_max_epi32(h, _mm_shuffle_epi32::<0b01_00_11_10>(h));
+            let h = _mm_max_epi32(h, _mm_shuffle_epi32::<0b10_11_00_01>(h));
+            _mm_cvtsi128_si32(h)
+        }
+    }
+}
+
 /// Which compiled copy of the walk to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernel {
@@ -401,7 +444,11 @@ impl<const W: usize> Lanes<W> {
     /// (reached the goal, or a dead end: their route is left as it was).
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lanes are indexed across several arrays
-    fn round<const AVX512: bool, const L: usize, const LEN: usize>(&mut self, p: &Problem<W>, limit: f64) -> u32 {
+    fn round<const AVX512: bool, const AVX2: bool, const L: usize, const LEN: usize>(
+        &mut self,
+        p: &Problem<W>,
+        limit: f64,
+    ) -> u32 {
         // A fixed length unrolls the scans into straight code.
         let len = if LEN == 0 { p.stride() } else { LEN };
         let mut slack = [0.0f32; IN_FLIGHT];
@@ -429,7 +476,15 @@ impl<const W: usize> Lanes<W> {
         } else {
             for l in 0..L {
                 slack[l] = f32_down(limit - self.time_s[l]);
-                best[l] = best_key(p.reach_row(self.cur[l]), &self.key[l], slack[l], len);
+                let row = p.reach_row(self.cur[l]);
+                #[cfg(target_arch = "x86_64")]
+                if AVX2 {
+                    // SAFETY: only `stream_avx2` instantiates AVX2 = true,
+                    // and it runs only on CPUs with AVX2.
+                    best[l] = unsafe { avx2::best_key(row, &self.key[l], slack[l], len) };
+                    continue;
+                }
+                best[l] = best_key(row, &self.key[l], slack[l], len);
             }
         }
         let goal = p.goal();
@@ -465,7 +520,7 @@ impl<const W: usize> Lanes<W> {
 /// is called once per vector, in the order walks finish (a function of the
 /// vectors alone, the same on every kernel).
 #[inline(always)]
-fn stream<'a, const AVX512: bool, const W: usize, P: Priority + 'a>(
+fn stream<'a, const AVX512: bool, const AVX2: bool, const W: usize, P: Priority + 'a>(
     d: &mut Decoder<W>,
     p: &Problem<W>,
     count: usize,
@@ -479,23 +534,31 @@ fn stream<'a, const AVX512: bool, const W: usize, P: Priority + 'a>(
         ($($len:literal)*) => {
             match p.stride() {
                 $($len if AVX512 && $len <= 64 * W => {
-                    stream_l::<AVX512, W, IN_FLIGHT, $len, P>(d, p, count, vector, done)
+                    stream_l::<AVX512, AVX2, W, IN_FLIGHT, $len, P>(d, p, count, vector, done)
                 })*
-                _ => stream_l::<AVX512, W, IN_FLIGHT, 0, P>(d, p, count, vector, done),
+                _ => stream_l::<AVX512, AVX2, W, IN_FLIGHT, 0, P>(d, p, count, vector, done),
             }
         };
     }
     // One or two vectors (single and paired decodes) use that many lanes.
     match count {
-        1 => stream_l::<AVX512, W, 1, 0, P>(d, p, count, vector, done),
-        2 => stream_l::<AVX512, W, 2, 0, P>(d, p, count, vector, done),
+        1 => stream_l::<AVX512, AVX2, W, 1, 0, P>(d, p, count, vector, done),
+        2 => stream_l::<AVX512, AVX2, W, 2, 0, P>(d, p, count, vector, done),
         _ => by_len!(16 32 48 64 80 96 112 128),
     }
 }
 
 /// [`stream`] on lanes 0..L, rows of `LEN` entries (0: [`Problem::stride`]).
 #[inline(always)]
-fn stream_l<'a, const AVX512: bool, const W: usize, const L: usize, const LEN: usize, P: Priority + 'a>(
+fn stream_l<
+    'a,
+    const AVX512: bool,
+    const AVX2: bool,
+    const W: usize,
+    const L: usize,
+    const LEN: usize,
+    P: Priority + 'a,
+>(
     d: &mut Decoder<W>,
     p: &Problem<W>,
     count: usize,
@@ -516,7 +579,7 @@ fn stream_l<'a, const AVX512: bool, const W: usize, const L: usize, const LEN: u
     }
     let mut next = count.min(L);
     while live != 0 {
-        let mut ended = lanes.round::<AVX512, L, LEN>(p, limit) & live;
+        let mut ended = lanes.round::<AVX512, AVX2, L, LEN>(p, limit) & live;
         while ended != 0 {
             let l = ended.trailing_zeros() as usize;
             ended &= ended - 1;
@@ -553,7 +616,7 @@ fn stream_avx512<'a, const W: usize, P: Priority + 'a>(
     vector: &dyn Fn(usize) -> &'a [P],
     done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
 ) {
-    stream::<true, W, P>(d, p, count, vector, done)
+    stream::<true, false, W, P>(d, p, count, vector, done)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -565,7 +628,7 @@ fn stream_avx2<'a, const W: usize, P: Priority + 'a>(
     vector: &dyn Fn(usize) -> &'a [P],
     done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
 ) {
-    stream::<false, W, P>(d, p, count, vector, done)
+    stream::<false, true, W, P>(d, p, count, vector, done)
 }
 /// The repair's scratch space (see [`Repair::repair`]).
 struct Repair<const W: usize> {
@@ -710,7 +773,7 @@ impl<const W: usize> Decoder<W> {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `usable` only yields Avx2 on CPUs with AVX2.
             Kernel::Avx2 => unsafe { stream_avx2(self, p, count, vector, done) },
-            _ => stream::<false, W, P>(self, p, count, vector, done),
+            _ => stream::<false, false, W, P>(self, p, count, vector, done),
         }
     }
 }
@@ -918,6 +981,43 @@ mod tests {
     type NodeSet = crate::problem::NodeSet;
     type Route = crate::route::Route;
     type Decoder = crate::decode::Decoder;
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx2_scan_takes_the_same_max_as_the_plain_one_at_every_edge_case() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut rng = crate::rng::PlannerRng::new(11);
+        let slack = 100.0f32;
+        // Reach exactly at the slack, just above and below it, +∞ (padding), NaN.
+        let pick = [
+            slack,
+            slack.next_up(),
+            slack.next_down(),
+            0.0,
+            f32::INFINITY,
+            f32::NAN,
+            250.0,
+        ];
+        for len in [16usize, 48, 128] {
+            for _ in 0..200 {
+                let reach: Vec<f32> = (0..len).map(|_| pick[rng.below(pick.len() as u32) as usize]).collect();
+                let key: Vec<i32> = (0..len)
+                    .map(|c| {
+                        if rng.below(4) == 0 {
+                            NO_KEY
+                        } else {
+                            pack_key::<2>(rng.uniform(-5.0, 5.0) as f32, c)
+                        }
+                    })
+                    .collect();
+                // SAFETY: AVX2 was detected above.
+                let fast = unsafe { avx2::best_key(&reach, &key, slack, len) };
+                assert_eq!(fast, best_key(&reach, &key, slack, len), "{reach:?} {key:?}");
+            }
+        }
+    }
 
     #[test]
     fn decodes_the_highest_priority_walk() {
