@@ -1455,26 +1455,23 @@ fn scaling_reports_every_column_per_instance_and_draws_them() {
     let csv = dir.join("s.csv");
     let svg = dir.join("s.svg");
     let files = format!("{DATA}/oplib/gen1/eil51-gen1-50.oplib,{DATA}/oplib/gen2/kroA200-gen2-50.oplib");
-    let run = |csv: &Path| {
-        let out = planner(&[
-            "scaling",
-            "--instances",
-            &files,
-            "--exact-time-limit",
-            "0.5",
-            "--repeats",
-            "2",
-            "--deadline-ms",
-            "5,10",
-            "--out",
-            path_str(csv),
-            "--plot",
-            path_str(&svg),
-        ]);
-        assert_ok(&out);
-        std::fs::read_to_string(csv).unwrap()
-    };
-    let table = run(&csv);
+    let out = planner(&[
+        "scaling",
+        "--instances",
+        &files,
+        "--exact-time-limit",
+        "0.5",
+        "--repeats",
+        "2",
+        "--deadline-ms",
+        "5,10",
+        "--out",
+        path_str(&csv),
+        "--plot",
+        path_str(&svg),
+    ]);
+    assert_ok(&out);
+    let table = std::fs::read_to_string(&csv).unwrap();
     let mut lines = table.lines();
     assert_eq!(
         lines.next(),

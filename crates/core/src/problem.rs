@@ -451,6 +451,13 @@ impl<const W: usize> Problem<W> {
     pub fn gain(&self, a: usize, b: usize) -> f64 {
         self.edge(a, b).gain
     }
+    /// Weight of edge a–b without the far node's prize: the same either way
+    /// round, since the prizes of a route's nodes do not depend on the
+    /// direction of travel.
+    #[inline]
+    pub fn edge_weight(&self, a: usize, b: usize) -> f64 {
+        self.gain(a, b) - self.prize(b)
+    }
     /// ξ/ρ of the edge's task (0 when ρ = 0).
     #[inline]
     pub fn risk_ratio(&self, a: usize, b: usize) -> f64 {

@@ -98,7 +98,7 @@ impl<const W: usize> Moves<W> {
     ) -> bool {
         let v = &self.value;
         let accept = |dt: f64, sd: f64| (sd > EPS && dt <= EPS) || (sd >= -EPS && dt < -EPS);
-        let ew = |a: usize, b: usize| p.gain(a, b) - p.prize(b);
+        let ew = |a: usize, b: usize| p.edge_weight(a, b);
         let mut changed = false;
         for _ in 0..max_rounds {
             let mut improved = false;
@@ -149,7 +149,7 @@ impl<const W: usize> Moves<W> {
         accept: &impl Fn(f64, f64) -> bool,
     ) -> bool {
         let len = route.len();
-        let ew = |a: usize, b: usize| p.gain(a, b) - p.prize(b);
+        let ew = |a: usize, b: usize| p.edge_weight(a, b);
         let fig = |a: usize, b: usize| (p.time_s(a, b), ew(a, b), p.risk_ratio(a, b));
         let wr = |a: usize, b: usize| (ew(a, b), p.risk_ratio(a, b));
         for l in 1..=max_segment {

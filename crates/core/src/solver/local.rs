@@ -44,9 +44,9 @@ impl<const W: usize> Default for LocalSearch<W> {
     }
 }
 
-/// A candidate move found by a pass.
+/// A candidate move found by a pass (also the exact solver's polish).
 #[derive(Clone, Copy)]
-enum Move {
+pub(crate) enum Move {
     /// Insert node `v` after position `i`.
     Insert { i: usize, v: usize },
     /// Insert nodes `v` then `w` after position `i`.
@@ -268,7 +268,7 @@ impl<const W: usize> LocalSearch<W> {
             [
                 p.time_s(a, b),
                 p.distance_m(a, b),
-                edge_weight(p, a, b),
+                p.edge_weight(a, b),
                 p.risk_ratio(a, b),
             ]
         };
@@ -369,7 +369,7 @@ impl<const W: usize> LocalSearch<W> {
                     eval,
                     dt,
                     p.distance_m(a, uj) + p.distance_m(ui, b) - p.distance_m(a, ui) - p.distance_m(uj, b),
-                    edge_weight(p, a, uj) + edge_weight(p, ui, b) - edge_weight(p, a, ui) - edge_weight(p, uj, b),
+                    p.edge_weight(a, uj) + p.edge_weight(ui, b) - p.edge_weight(a, ui) - p.edge_weight(uj, b),
                     p.risk_ratio(a, uj) + p.risk_ratio(ui, b) - p.risk_ratio(a, ui) - p.risk_ratio(uj, b),
                     0,
                 );
@@ -380,14 +380,8 @@ impl<const W: usize> LocalSearch<W> {
     }
 }
 
-/// Weight of edge a–b without the far node's prize (prizes of the nodes on a
-/// route do not depend on the direction of travel).
-#[inline]
-fn edge_weight<const W: usize>(p: &Problem<W>, a: usize, b: usize) -> f64 {
-    p.gain(a, b) - p.prize(b)
-}
-
-fn apply<const W: usize>(route: &Route<W>, scratch: &mut Route<W>, mv: Move) {
+/// Writes into `scratch` the route that `mv` makes of `route`.
+pub(crate) fn apply<const W: usize>(route: &Route<W>, scratch: &mut Route<W>, mv: Move) {
     scratch.clear();
     match mv {
         Move::Insert { i, v } => {

@@ -56,7 +56,7 @@ pub(super) fn beam<const W: usize>(
     // Levels valid for each beam member (before its own children are derived).
     let mut member_levels: Vec<Vec<Level<W>>> = vec![levels.to_vec()];
     let mut next: Vec<Partial<W>> = Vec::new();
-    while !beam.is_empty() && !search.past_deadline() {
+    while !beam.is_empty() {
         next.clear();
         let mut derived: Vec<Vec<Level<W>>> = Vec::with_capacity(beam.len());
         for (i, m) in beam.iter().enumerate() {

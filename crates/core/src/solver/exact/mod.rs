@@ -189,7 +189,7 @@ pub fn solve_exact<const W: usize>(
             let x = if paper {
                 phi1 * t - phi2 * problem.risk_ratio(a, b)
             } else {
-                problem.gain(a, b) - problem.prize(b)
+                problem.edge_weight(a, b)
             };
             if !(t.is_finite() && t >= 0.0 && x.is_finite()) {
                 return Err(ExactError::BadEdge { a, b });

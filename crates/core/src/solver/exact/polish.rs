@@ -3,24 +3,7 @@
 use crate::capacity::PerNode;
 use crate::problem::Problem;
 use crate::route::{Route, RouteEval};
-
-/// One move of the polish, on route positions.
-#[derive(Clone, Copy)]
-enum Move {
-    /// Insert a free node between positions `i` and `i + 1`.
-    Insert { i: usize, v: usize },
-    /// Replace the interior node at `i` by a free node.
-    Replace { i: usize, v: usize },
-    /// Remove the interior node at `i`.
-    Remove { i: usize },
-    /// Reverse the interior stretch `i..=j`.
-    Reverse { i: usize, j: usize },
-    /// Swap the interior nodes at `i < j`.
-    Swap { i: usize, j: usize },
-    /// Take the interior node at `i` out and put it before the node at `j`
-    /// (`j < i`) or after it (`j > i`).
-    Shift { i: usize, j: usize },
-}
+use crate::solver::local::{Move, apply};
 
 /// Change of (time, edge weight, Σ ξ/ρ) of a move, the node prizes apart.
 type Delta = (f64, f64, f64);
@@ -44,10 +27,8 @@ pub(super) fn polish<const W: usize>(
     stop: impl Fn() -> bool,
 ) -> (Route<W>, RouteEval) {
     let limit = p.budget_limit_s();
-    // Edges are undirected; a node's prize is counted apart (gain(a, b)
-    // includes b's prize).
-    let ew = |a: usize, b: usize| p.gain(a, b) - p.prize(b);
-    let fig = |a: usize, b: usize| -> Delta { (p.time_s(a, b), ew(a, b), p.risk_ratio(a, b)) };
+    // Edges are undirected; a node's prize is counted apart.
+    let fig = |a: usize, b: usize| -> Delta { (p.time_s(a, b), p.edge_weight(a, b), p.risk_ratio(a, b)) };
     let sum = |add: &[(usize, usize)], sub: &[(usize, usize)]| -> Delta {
         let mut d = (0.0, 0.0, 0.0);
         for &(a, b) in add {
@@ -119,13 +100,9 @@ pub(super) fn polish<const W: usize>(
                 let (a, b) = (c[i - 1], c[j + 1]);
                 let (old, new) = ([(a, c[i]), (c[j], b)], [(a, c[j]), (c[i], b)]);
                 if edges(&new) {
-                    let d = sum(&new, &old);
-                    offer(Move::Reverse { i, j }, d, 0.0);
-                    // Swapping neighbours is that same reversal.
-                    if j == i + 1 {
-                        offer(Move::Swap { i, j }, d, 0.0);
-                    }
+                    offer(Move::Reverse { i, j }, sum(&new, &old), 0.0);
                 }
+                // Swapping neighbours is the reversal above.
                 if j > i + 1 {
                     let (x, y) = (c[i], c[j]);
                     let old = [(c[i - 1], x), (x, c[i + 1]), (c[j - 1], y), (y, c[j + 1])];
@@ -144,39 +121,22 @@ pub(super) fn polish<const W: usize>(
                 if j == i {
                     continue;
                 }
-                let (u, w) = if j < i { (c[j - 1], c[j]) } else { (c[j], c[j + 1]) };
+                // Before c[j] (j < i) or after it (j > i): after position k.
+                let k = if j < i { j - 1 } else { j };
+                let (u, w) = (c[k], c[k + 1]);
                 let new = [(u, x), (x, w)];
                 if edges(&new) {
                     let d = sum(&new, &[(u, w)]);
-                    offer(Move::Shift { i, j }, (out.0 + d.0, out.1 + d.1, out.2 + d.2), 0.0);
+                    let mv = Move::Relocate { i, l: 1, k, rev: false };
+                    offer(mv, (out.0 + d.0, out.1 + d.1, out.2 + d.2), 0.0);
                 }
             }
         }
         let Some((mv, _)) = best else {
             return (route, eval);
         };
-        let mut next = route;
-        match mv {
-            Move::Insert { i, v } => next.insert(i + 1, v),
-            Move::Replace { i, v } => {
-                next.remove(i);
-                next.insert(i, v);
-            }
-            Move::Remove { i } => next.remove(i),
-            Move::Reverse { i, j } => next.reverse(i, j),
-            Move::Swap { i, j } => {
-                next.remove(j);
-                next.insert(j, c[i]);
-                next.remove(i);
-                next.insert(i, c[j]);
-            }
-            Move::Shift { i, j } => {
-                // Before c[j] (j < i), or after c[j], which the removal
-                // moved up to j − 1 (j > i): position j either way.
-                next.remove(i);
-                next.insert(j, c[i]);
-            }
-        }
+        let mut next = Route::new();
+        apply(&route, &mut next, mv);
         match p.evaluate(&next) {
             Some(e) if e.feasible && p.better(&e, &eval) => {
                 route = next;

@@ -505,8 +505,7 @@ impl<'p, const W: usize> Search<'p, W> {
             && e.feasible
             && (!self.have_best || self.p.better(&e, &self.best_eval))
         {
-            let deadline = self.deadline;
-            let (r, e) = polish(self.p, self.route, e, || deadline.is_some_and(|d| Instant::now() >= d));
+            let (r, e) = polish(self.p, self.route, e, || self.past_deadline());
             self.best_route = r;
             self.best_eval = e;
             self.have_best = true;
@@ -525,8 +524,7 @@ impl<'p, const W: usize> Search<'p, W> {
         self.aborted
     }
 
-    /// Whether the time limit has passed (the clock is read only here and
-    /// in the polish of a new incumbent).
+    /// Whether the time limit has passed (the clock is read only here).
     pub(super) fn past_deadline(&self) -> bool {
         self.deadline.is_some_and(|d| Instant::now() >= d)
     }
