@@ -246,6 +246,10 @@ fn a_link_cut_changes_nothing_onboard_is_reported_on_both_sides_and_the_shore_ca
     let mission = start_mission(&out, &p, &ep, "600", &timeout);
     let first = start_shore(&ep, Some(&first_out), &[&timeout[..], &["--give-up-s", "60"]].concat());
     wait_for_line(&first_out, "shore.log", "\"plan\"");
+    // The console can hold a plan (its catch-up asks the bridge for one)
+    // before the bridge has heard the console's first heartbeat: wait for
+    // that too, or the count of connections below would start at zero.
+    wait_for_line(&out, "link.jsonl", "link_connected");
     // Cut 1: the bridge killed; the supervisor restarts it, the shore reconnects.
     let link = pid_of(&out, "link").expect("the link's pid");
     sigkill(link);
