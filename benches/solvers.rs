@@ -110,7 +110,7 @@ fn decode_stream<M: Measurement>(c: &mut Criterion<M>, name: &str) {
                     &ps[(k / 16) % NETWORKS],
                     SWARM,
                     &|i| &pool[i * MAX_NODES..(i + 1) * MAX_NODES],
-                    &mut |_, _, e| weight += e.weight,
+                    &mut |_, w| weight += w.ranked().weight,
                 );
                 black_box(weight)
             })
@@ -263,7 +263,7 @@ fn class_benches<const W: usize, M: Measurement>(c: &mut Criterion<M>, prefix: &
                 &ps[k % ps.len()],
                 SWARM,
                 &|i| &pool[i * cap..(i + 1) * cap],
-                &mut |_, _, e| weight += e.weight,
+                &mut |_, w| weight += w.ranked().weight,
             );
             black_box(weight)
         })

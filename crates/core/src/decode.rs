@@ -45,9 +45,11 @@
 //!   core overlaps their chains; a walk that reaches the goal hands its lane
 //!   straight to the next vector, so no lane waits for a batch's longest
 //!   walk. The solvers decode their whole population as one stream.
-//! - A step carries only the route's time (the next step's slack needs
-//!   it); distance, weight, risk and tasks are summed once the route is
-//!   known, in the same order, so the figures are bit-for-bit those of a
+//! - A step carries the route's time (the next step's slack needs it) and
+//!   the one figure the objective ranks by (`Problem::merit`), so a
+//!   finished walk is ranked at once ([`Walked::ranked`]); the other
+//!   figures are summed only for a route its caller keeps
+//!   ([`Walked::figures`]), in the same order, so bit for bit those of a
 //!   step-by-step sum.
 //! - The repair runs, per cut point, an A* search with the look-ahead's
 //!   shortest time home as heuristic, pruned by the time left, so it only
@@ -395,6 +397,8 @@ struct Lanes<const W: usize> {
     visited: [NodeSet<W>; IN_FLIGHT],
     /// Time of the route so far, s (the next step's slack needs it).
     time_s: [f64; IN_FLIGHT],
+    /// The figure the objective ranks by, so far ([`Problem::merit`]).
+    merit: [f64; IN_FLIGHT],
     cur: [usize; IN_FLIGHT],
     /// Which vector of the stream each lane decodes.
     item: [usize; IN_FLIGHT],
@@ -406,6 +410,7 @@ impl<const W: usize> Lanes<W> {
         route: [Route::new(); IN_FLIGHT],
         visited: [NodeSet::FULL; IN_FLIGHT],
         time_s: [0.0; IN_FLIGHT],
+        merit: [0.0; IN_FLIGHT],
         cur: [0; IN_FLIGHT],
         item: [0; IN_FLIGHT],
     };
@@ -436,6 +441,7 @@ impl<const W: usize> Lanes<W> {
         }
         self.visited[l] = NodeSet::single(cur);
         self.time_s[l] = 0.0;
+        self.merit[l] = p.merit_at_start();
         self.cur[l] = cur;
         self.item[l] = item;
     }
@@ -495,14 +501,15 @@ impl<const W: usize> Lanes<W> {
                 continue;
             }
             let next = key_id::<W>(best[l]);
-            // The figures are summed as the walk goes, in route order (so
-            // bit for bit those of `Repair::sum_figures`); the time also
-            // goes where the next round's slack reads it.
-            // Only the time is kept while walking (the next step waits for
-            // it); the other figures are summed once the route is known
-            // (summing them here too measured slower at 128 nodes: the
-            // edge records are four times the time table's size).
+            // The time (which the next step's slack waits for) and the
+            // objective's figure are summed as the walk goes, in route
+            // order (so bit for bit those of `sum_figures`), each from a
+            // table of 8 bytes a pair. The other figures wait until a
+            // caller asks ([`Walked::figures`]): summing them here measured
+            // slower at 128 nodes (their records are four times the size),
+            // and after the walk they were a serial chain of adds per route.
             self.time_s[l] += p.time_s(self.cur[l], next);
+            self.merit[l] += p.merit(self.cur[l], next);
             self.route[l].push(next);
             self.visited[l].insert(next);
             if !AVX512 {
@@ -516,7 +523,7 @@ impl<const W: usize> Lanes<W> {
 }
 
 /// The stream loop: [`IN_FLIGHT`] walks at once, stepped in rounds; a
-/// finished walk's lane takes the next vector at once. `done(i, route, e)`
+/// finished walk's lane takes the next vector at once. `done(i, walked)`
 /// is called once per vector, in the order walks finish (a function of the
 /// vectors alone, the same on every kernel).
 #[inline(always)]
@@ -525,7 +532,7 @@ fn stream<'a, const AVX512: bool, const AVX2: bool, const W: usize, P: Priority 
     p: &Problem<W>,
     count: usize,
     vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
+    done: &mut dyn FnMut(usize, Walked<'_, W>),
 ) {
     // Streams of eight walks on AVX-512 get a copy per padded length up
     // to 128 nodes (the scan loops unrolled); other cases read the length
@@ -563,7 +570,7 @@ fn stream_l<
     p: &Problem<W>,
     count: usize,
     vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
+    done: &mut dyn FnMut(usize, Walked<'_, W>),
 ) {
     let limit = p.budget_limit_s();
     let len = if LEN == 0 { p.stride() } else { LEN };
@@ -584,18 +591,25 @@ fn stream_l<
             let l = ended.trailing_zeros() as usize;
             ended &= ended - 1;
             let route = &mut lanes.route[l];
-            let e = if route.last() == Some(p.goal()) {
-                let e = repair.sum_figures::<false>(p, route);
-                debug_assert_eq!(e.time_s.to_bits(), lanes.time_s[l].to_bits());
-                RouteEval {
-                    feasible: e.time_s <= limit,
-                    ..e
+            let walked = if route.last() == Some(p.goal()) {
+                Walked {
+                    problem: p,
+                    route,
+                    ranked: p.ranked(lanes.time_s[l], lanes.merit[l]),
+                    complete: false,
                 }
             } else {
-                repair.repair(p, route)
+                let e = repair.repair(p, route);
+                Walked {
+                    problem: p,
+                    route,
+                    ranked: e,
+                    complete: true,
+                }
             };
-            debug_assert_eq!(p.evaluate(route), Some(e));
-            done(lanes.item[l], route, e);
+            debug_assert_eq!(p.evaluate(walked.route), Some(walked.figures()));
+            debug_assert!(walked.complete || *walked.ranked() == p.ranked_part(&walked.figures()));
+            done(lanes.item[l], walked);
             if next < count {
                 lanes.begin::<AVX512, P>(l, p, len, vector(next), next);
                 next += 1;
@@ -614,7 +628,7 @@ fn stream_avx512<'a, const W: usize, P: Priority + 'a>(
     p: &Problem<W>,
     count: usize,
     vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
+    done: &mut dyn FnMut(usize, Walked<'_, W>),
 ) {
     stream::<true, false, W, P>(d, p, count, vector, done)
 }
@@ -626,10 +640,81 @@ fn stream_avx2<'a, const W: usize, P: Priority + 'a>(
     p: &Problem<W>,
     count: usize,
     vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
+    done: &mut dyn FnMut(usize, Walked<'_, W>),
 ) {
     stream::<false, true, W, P>(d, p, count, vector, done)
 }
+/// Sums the figures of `out` edge by edge in route order (the order, and
+/// so the rounding, of a walk accumulating them step by step) and returns
+/// them, not marked feasible; with `PREFIX`, also stores the figures of the
+/// first i edges in `prefix[i]` for every i.
+#[inline(always)]
+fn sum_figures<const W: usize, const PREFIX: bool>(
+    p: &Problem<W>,
+    out: &Route<W>,
+    prefix: &mut [RouteEval],
+) -> RouteEval {
+    let nodes = out.ids();
+    let mut e = RouteEval {
+        weight: p.prize(usize::from(nodes[0])),
+        ..RouteEval::default()
+    };
+    if PREFIX {
+        prefix[0] = e;
+    }
+    for (i, hop) in nodes.windows(2).enumerate() {
+        let step = p.edge(usize::from(hop[0]), usize::from(hop[1]));
+        e.time_s += step.time_s;
+        e.distance_m += step.distance_m;
+        e.weight += step.gain;
+        e.risk_ratio_sum += step.risk_ratio;
+        e.tasks += 1;
+        if PREFIX {
+            prefix[i + 1] = e;
+        }
+    }
+    e
+}
+
+/// A finished walk as a stream hands it over: its route, ranked at once,
+/// and its other figures on request (most walks of a swarm are compared
+/// and dropped, so summing every figure of every route would be wasted).
+pub struct Walked<'s, const W: usize> {
+    problem: &'s Problem<W>,
+    route: &'s Route<W>,
+    ranked: RouteEval,
+    /// `ranked` holds every figure (the repair summed them).
+    complete: bool,
+}
+
+impl<const W: usize> Walked<'_, W> {
+    /// The route.
+    #[inline]
+    pub fn route(&self) -> &Route<W> {
+        self.route
+    }
+
+    /// The figures [`Problem::score`] and [`Problem::better`] read, exact:
+    /// rank or compare by these; the others may be 0 ([`Walked::figures`]
+    /// has them all).
+    #[inline]
+    pub fn ranked(&self) -> &RouteEval {
+        &self.ranked
+    }
+
+    /// Every figure of the route, exactly those of [`Decoder::decode`].
+    #[inline]
+    pub fn figures(&self) -> RouteEval {
+        if self.complete {
+            return self.ranked;
+        }
+        RouteEval {
+            feasible: self.ranked.feasible,
+            ..sum_figures::<W, false>(self.problem, self.route, &mut [])
+        }
+    }
+}
+
 /// The repair's scratch space (see [`Repair::repair`]).
 struct Repair<const W: usize> {
     /// Figures of the route's first i edges, for i = 0..len (filled by
@@ -702,9 +787,9 @@ impl<const W: usize> Decoder<W> {
     ) -> RouteEval {
         let priorities = &priorities[..p.n()];
         let mut result = RouteEval::default();
-        self.stream_with(kernel, p, 1, &|_| priorities, &mut |_, r, e| {
-            *out = *r;
-            result = e;
+        self.stream_with(kernel, p, 1, &|_| priorities, &mut |_, w| {
+            *out = *w.route();
+            result = w.figures();
         });
         result
     }
@@ -722,28 +807,23 @@ impl<const W: usize> Decoder<W> {
     ) -> (RouteEval, RouteEval) {
         let (a, b) = (&a[..p.n()], &b[..p.n()]);
         let mut result = [RouteEval::default(); 2];
-        self.stream_with(
-            Kernel::detect(),
-            p,
-            2,
-            &|i| if i == 0 { a } else { b },
-            &mut |i, r, e| {
-                if i == 0 {
-                    *out_a = *r;
-                } else {
-                    *out_b = *r;
-                }
-                result[i] = e;
-            },
-        );
+        self.stream_with(Kernel::detect(), p, 2, &|i| if i == 0 { a } else { b }, &mut |i, w| {
+            if i == 0 {
+                *out_a = *w.route();
+            } else {
+                *out_b = *w.route();
+            }
+            result[i] = w.figures();
+        });
         (result[0], result[1])
     }
 
     /// Decodes `count` vectors, `vector(i)` for i in 0..count (each at
     /// least `p.n()` values), with [`IN_FLIGHT`] walks going at once, and
-    /// calls `done(i, route, figures)` once for each as its walk finishes.
-    /// Each vector's route and figures are exactly those of
-    /// [`Decoder::decode`]; the order of the calls depends only on the
+    /// calls `done(i, walked)` once for each as its walk finishes.
+    /// Each vector's route and [`Walked::figures`] are exactly those of
+    /// [`Decoder::decode`]; its [`Walked::ranked`] figures are the ones the
+    /// objective compares, with no further pass over the route. The order of the calls depends only on the
     /// vectors (not on the kernel).
     #[inline]
     pub fn decode_stream<'a, P: Priority + 'a>(
@@ -751,7 +831,7 @@ impl<const W: usize> Decoder<W> {
         p: &Problem<W>,
         count: usize,
         vector: &dyn Fn(usize) -> &'a [P],
-        done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
+        done: &mut dyn FnMut(usize, Walked<'_, W>),
     ) {
         self.stream_with(Kernel::detect(), p, count, vector, done)
     }
@@ -764,7 +844,7 @@ impl<const W: usize> Decoder<W> {
         p: &Problem<W>,
         count: usize,
         vector: &dyn Fn(usize) -> &'a [P],
-        done: &mut dyn FnMut(usize, &Route<W>, RouteEval),
+        done: &mut dyn FnMut(usize, Walked<'_, W>),
     ) {
         match kernel.usable() {
             #[cfg(target_arch = "x86_64")]
@@ -779,32 +859,10 @@ impl<const W: usize> Decoder<W> {
 }
 
 impl<const W: usize> Repair<W> {
-    /// Sums the figures of `out` edge by edge in route order (the order,
-    /// and so the rounding, of a walk accumulating them step by step) and
-    /// returns them, not marked feasible; with `PREFIX`, also stores the
-    /// figures of the first i edges in `prefix[i]` for every i.
-    #[inline(always)]
-    fn sum_figures<const PREFIX: bool>(&mut self, p: &Problem<W>, out: &Route<W>) -> RouteEval {
-        let nodes = out.ids();
-        let mut e = RouteEval {
-            weight: p.prize(usize::from(nodes[0])),
-            ..RouteEval::default()
-        };
-        if PREFIX {
-            self.prefix[0] = e;
-        }
-        for (i, hop) in nodes.windows(2).enumerate() {
-            let step = p.edge(usize::from(hop[0]), usize::from(hop[1]));
-            e.time_s += step.time_s;
-            e.distance_m += step.distance_m;
-            e.weight += step.gain;
-            e.risk_ratio_sum += step.risk_ratio;
-            e.tasks += 1;
-            if PREFIX {
-                self.prefix[i + 1] = e;
-            }
-        }
-        e
+    /// [`sum_figures`], also storing the figures of the first i edges in
+    /// `prefix[i]` for every i.
+    fn sum_prefixes(&mut self, p: &Problem<W>, out: &Route<W>) -> RouteEval {
+        sum_figures::<W, true>(p, out, &mut self.prefix)
     }
 
     /// Cuts `out` back to the latest node r_k with a quickest path home
@@ -820,7 +878,7 @@ impl<const W: usize> Repair<W> {
     /// `f32` test may have refused a step that just fits in `f64`.
     #[inline(never)]
     fn repair(&mut self, p: &Problem<W>, out: &mut Route<W>) -> RouteEval {
-        self.sum_figures::<true>(p, out);
+        self.sum_prefixes(p, out);
         let limit = p.budget_limit_s();
         let len = padded_len(p.n());
         let mut cut = None;
@@ -1389,8 +1447,11 @@ mod tests {
             for kernel in Kernel::available() {
                 let mut seen = Vec::new();
                 let mut bad = None;
-                da.stream_with(kernel, &p, count, &|i| &raw[i * stride..i * stride + n], &mut |i, r, e| {
-                    if (r.ids(), e) != (singles[i].0.ids(), singles[i].1) {
+                da.stream_with(kernel, &p, count, &|i| &raw[i * stride..i * stride + n], &mut |i, w| {
+                    let e = w.figures();
+                    if (w.route().ids(), e) != (singles[i].0.ids(), singles[i].1)
+                        || p.ranked_part(w.ranked()) != p.ranked_part(&e)
+                    {
                         bad = Some(i);
                     }
                     seen.push(i);

@@ -16,6 +16,7 @@ pub use crate::capacity::NodeSet;
 use crate::capacity::{DEFAULT_WORDS, PerNode, nodes_of};
 use crate::decode::padded_len;
 use crate::instance::{Instance, Objective};
+use crate::route::RouteEval;
 
 /// Default planning reserve held back from every plan's budget, s (our
 /// choice, measured: lockstep missions on
@@ -140,6 +141,12 @@ struct Tables<const W: usize> {
     /// the decoder's step → time → next step chain loads from this small
     /// table rather than the 4× larger `edge`.
     time_s: Table<f64, W>,
+    /// What a step a → b adds to the figure the objective ranks by (the
+    /// gain for `max_weight`, ξ/ρ for `paper_cost`; 0 where there is no
+    /// edge): a decoder's walk sums it beside the time, from a table as
+    /// small as the time's, so a finished walk is ranked without a second
+    /// pass over its route.
+    merit: Table<f64, W>,
     /// Everything a step a → b adds to a route's figures.
     edge: Table<EdgeData, W>,
 }
@@ -159,10 +166,12 @@ impl<const W: usize> Tables<W> {
         unsafe {
             let reach = core::ptr::addr_of_mut!((*p).reach_s).cast::<f32>();
             let time = core::ptr::addr_of_mut!((*p).time_s).cast::<f64>();
+            let merit = core::ptr::addr_of_mut!((*p).merit).cast::<f64>();
             let edge = core::ptr::addr_of_mut!((*p).edge).cast::<EdgeData>();
             for cell in 0..Self::CELLS {
                 reach.add(cell).write(f32::INFINITY);
                 time.add(cell).write(f64::INFINITY);
+                merit.add(cell).write(0.0);
                 edge.add(cell).write(EdgeData::NONE);
             }
             b.assume_init()
@@ -285,6 +294,7 @@ impl<const W: usize> Problem<W> {
         let stride = padded_len(n);
         let used = (self.n * self.stride).max(n * stride);
         flat_mut(&mut self.tables.time_s)[..used].fill(f64::INFINITY);
+        flat_mut(&mut self.tables.merit)[..used].fill(0.0);
         flat_mut(&mut self.tables.reach_s)[..used].fill(f32::INFINITY);
         flat_mut(&mut self.tables.edge)[..used].fill(EdgeData::NONE);
         let rows = self.n.max(n);
@@ -333,10 +343,15 @@ impl<const W: usize> Problem<W> {
     /// shortest time to the goal and the look-ahead table.
     pub fn finish(&mut self) -> Result<(), ProblemError> {
         let (n, stride) = (self.n, self.stride);
-        let edge = flat_mut(&mut self.tables.edge);
+        let (edge, merit) = (flat_mut(&mut self.tables.edge), flat_mut(&mut self.tables.merit));
         for u in 0..n {
             for v in self.adjacency[u].iter() {
-                edge[u * stride + v].gain += self.prize[v];
+                let cell = u * stride + v;
+                edge[cell].gain += self.prize[v];
+                merit[cell] = match self.objective {
+                    Objective::MaxWeight => edge[cell].gain,
+                    Objective::PaperCost { .. } => edge[cell].risk_ratio,
+                };
             }
         }
         self.shortest_times_to_goal();
@@ -491,6 +506,48 @@ impl<const W: usize> Problem<W> {
     #[inline]
     pub(crate) fn reach_from(&self, u: usize) -> &[f32] {
         &flat(&self.tables.reach_s)[u * self.stride..]
+    }
+    /// What the step `a → b` adds to the figure the objective ranks by
+    /// (see [`Problem::ranked`]).
+    #[inline]
+    pub(crate) fn merit(&self, a: usize, b: usize) -> f64 {
+        flat(&self.tables.merit)[a * self.stride + b]
+    }
+    /// The ranked figure of a route that has not left the start yet: the
+    /// weight counts the start's prize.
+    #[inline]
+    pub(crate) fn merit_at_start(&self) -> f64 {
+        match self.objective {
+            Objective::MaxWeight => self.prize(self.start),
+            Objective::PaperCost { .. } => 0.0,
+        }
+    }
+    /// The figures of a route as far as [`Problem::score`] and
+    /// [`Problem::better`] read them, from its time and its merit (the
+    /// [`Problem::merit`] of its steps summed in route order after
+    /// [`Problem::merit_at_start`], so bit for bit the full figures' own
+    /// sum): the time, feasibility and the weight (`max_weight`) or Σ ξ/ρ
+    /// (`paper_cost`); the other figures are 0.
+    #[inline]
+    pub(crate) fn ranked(&self, time_s: f64, merit: f64) -> RouteEval {
+        let mut e = RouteEval {
+            time_s,
+            feasible: time_s <= self.budget_limit_s(),
+            ..RouteEval::default()
+        };
+        match self.objective {
+            Objective::MaxWeight => e.weight = merit,
+            Objective::PaperCost { .. } => e.risk_ratio_sum = merit,
+        }
+        e
+    }
+    /// [`Problem::ranked`] of a route with figures `e`.
+    pub(crate) fn ranked_part(&self, e: &RouteEval) -> RouteEval {
+        let merit = match self.objective {
+            Objective::MaxWeight => e.weight,
+            Objective::PaperCost { .. } => e.risk_ratio_sum,
+        };
+        self.ranked(e.time_s, merit)
     }
     /// Everything the step `a → b` adds to a route (one cache line).
     #[inline]

@@ -179,8 +179,8 @@ fn measure<const W: usize>(
         .collect();
     let mut decoder = Decoder::<W>::new();
     let mut stream = |weight: &mut f64| {
-        decoder.decode_stream(&problem, SWARM, &|i| &pool[i * cap..(i + 1) * cap], &mut |_, _, e| {
-            *weight += e.weight
+        decoder.decode_stream(&problem, SWARM, &|i| &pool[i * cap..(i + 1) * cap], &mut |_, w| {
+            *weight += w.ranked().weight
         })
     };
     let mut sink = 0.0;

@@ -88,6 +88,8 @@ pub struct Bbo<const W: usize = DEFAULT_WORDS> {
     pop: Vec<f32>,
     /// The population as the generation began (migration reads from it).
     old: Vec<f32>,
+    /// Each habitat's route as far as the ranking reads it
+    /// ([`crate::decode::Walked::ranked`]).
     eval: Vec<RouteEval>,
     /// Habitat indices, best first.
     order: Vec<usize>,
@@ -170,13 +172,13 @@ impl<const W: usize> Bbo<W> {
             problem,
             count,
             &|i| &pop[habitat(i) * stride..(habitat(i) + 1) * stride],
-            &mut |i, route, e| {
-                let h = habitat(i);
-                eval[h] = e;
-                rank_key[h] = (problem.score(&e), e.time_s);
-                if problem.better(&e, best_eval) {
-                    *best = *route;
-                    *best_eval = e;
+            &mut |i, walked| {
+                let (h, e) = (habitat(i), walked.ranked());
+                eval[h] = *e;
+                rank_key[h] = (problem.score(e), e.time_s);
+                if problem.better(e, best_eval) {
+                    *best = *walked.route();
+                    *best_eval = walked.figures();
                 }
             },
         );

@@ -268,15 +268,16 @@ impl<const W: usize> Pso<W> {
             problem,
             self.settings.particles,
             &|i| &x[i * stride..(i + 1) * stride],
-            &mut |i, route, e| {
-                if !problem.better(&e, &pbest_eval[i]) {
+            &mut |i, walked| {
+                if !problem.better(walked.ranked(), &pbest_eval[i]) {
                     return;
                 }
+                let e = walked.figures();
                 let row = i * stride..(i + 1) * stride;
                 pbest[row.clone()].copy_from_slice(&x[row]);
                 pbest_eval[i] = e;
                 if problem.better(&e, best_eval) {
-                    *best = *route;
+                    *best = *walked.route();
                     *best_eval = e;
                     *best_particle = i;
                     improved = true;
