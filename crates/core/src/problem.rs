@@ -122,7 +122,7 @@ fn flat_mut<T, const W: usize>(t: &mut Table<T, W>) -> &mut [T] {
     t.as_flattened_mut().as_flattened_mut().as_flattened_mut()
 }
 
-/// Dense per-pair tables, boxed because they are large (704 KiB at 128
+/// Dense per-pair tables, boxed because they are large (832 KiB at 128
 /// nodes). Each is row-major with a row stride of `padded_len(n)` (n
 /// rounded up to the decoder's scan block), not the capacity, so a small
 /// problem's rows sit together (13 KiB of look-ahead at n = 40 instead of
