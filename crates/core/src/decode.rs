@@ -823,8 +823,8 @@ impl<const W: usize> Decoder<W> {
     /// calls `done(i, walked)` once for each as its walk finishes.
     /// Each vector's route and [`Walked::figures`] are exactly those of
     /// [`Decoder::decode`]; its [`Walked::ranked`] figures are the ones the
-    /// objective compares, with no further pass over the route. The order of the calls depends only on the
-    /// vectors (not on the kernel).
+    /// objective compares, with no further pass over the route. The order
+    /// of the calls depends only on the vectors (not on the kernel).
     #[inline]
     pub fn decode_stream<'a, P: Priority + 'a>(
         &mut self,

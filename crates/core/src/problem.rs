@@ -517,9 +517,18 @@ impl<const W: usize> Problem<W> {
     /// weight counts the start's prize.
     #[inline]
     pub(crate) fn merit_at_start(&self) -> f64 {
+        self.merit_of(&RouteEval {
+            weight: self.prize(self.start),
+            ..RouteEval::default()
+        })
+    }
+    /// The figure of `e` the objective ranks by: its weight (`max_weight`)
+    /// or Σ ξ/ρ (`paper_cost`).
+    #[inline]
+    fn merit_of(&self, e: &RouteEval) -> f64 {
         match self.objective {
-            Objective::MaxWeight => self.prize(self.start),
-            Objective::PaperCost { .. } => 0.0,
+            Objective::MaxWeight => e.weight,
+            Objective::PaperCost { .. } => e.risk_ratio_sum,
         }
     }
     /// The figures of a route as far as [`Problem::score`] and
@@ -543,11 +552,7 @@ impl<const W: usize> Problem<W> {
     }
     /// [`Problem::ranked`] of a route with figures `e`.
     pub(crate) fn ranked_part(&self, e: &RouteEval) -> RouteEval {
-        let merit = match self.objective {
-            Objective::MaxWeight => e.weight,
-            Objective::PaperCost { .. } => e.risk_ratio_sum,
-        };
-        self.ranked(e.time_s, merit)
+        self.ranked(e.time_s, self.merit_of(e))
     }
     /// Everything the step `a → b` adds to a route (one cache line).
     #[inline]
