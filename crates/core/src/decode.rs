@@ -527,12 +527,20 @@ impl<const W: usize> Lanes<W> {
 /// is called once per vector, in the order walks finish (a function of the
 /// vectors alone, the same on every kernel).
 #[inline(always)]
-fn stream<'a, const AVX512: bool, const AVX2: bool, const W: usize, P: Priority + 'a>(
+fn stream<
+    'a,
+    const AVX512: bool,
+    const AVX2: bool,
+    const W: usize,
+    P: Priority + 'a,
+    V: Fn(usize) -> &'a [P] + ?Sized,
+    D: FnMut(usize, Walked<'_, W>) + ?Sized,
+>(
     d: &mut Decoder<W>,
     p: &Problem<W>,
     count: usize,
-    vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, Walked<'_, W>),
+    vector: &V,
+    done: &mut D,
 ) {
     // Streams of eight walks on AVX-512 get a copy per padded length up
     // to 128 nodes (the scan loops unrolled); other cases read the length
@@ -541,16 +549,16 @@ fn stream<'a, const AVX512: bool, const AVX2: bool, const W: usize, P: Priority 
         ($($len:literal)*) => {
             match p.stride() {
                 $($len if AVX512 && $len <= 64 * W => {
-                    stream_l::<AVX512, AVX2, W, IN_FLIGHT, $len, P>(d, p, count, vector, done)
+                    stream_l::<AVX512, AVX2, W, IN_FLIGHT, $len, P, V, D>(d, p, count, vector, done)
                 })*
-                _ => stream_l::<AVX512, AVX2, W, IN_FLIGHT, 0, P>(d, p, count, vector, done),
+                _ => stream_l::<AVX512, AVX2, W, IN_FLIGHT, 0, P, V, D>(d, p, count, vector, done),
             }
         };
     }
     // One or two vectors (single and paired decodes) use that many lanes.
     match count {
-        1 => stream_l::<AVX512, AVX2, W, 1, 0, P>(d, p, count, vector, done),
-        2 => stream_l::<AVX512, AVX2, W, 2, 0, P>(d, p, count, vector, done),
+        1 => stream_l::<AVX512, AVX2, W, 1, 0, P, V, D>(d, p, count, vector, done),
+        2 => stream_l::<AVX512, AVX2, W, 2, 0, P, V, D>(d, p, count, vector, done),
         _ => by_len!(16 32 48 64 80 96 112 128),
     }
 }
@@ -565,12 +573,14 @@ fn stream_l<
     const L: usize,
     const LEN: usize,
     P: Priority + 'a,
+    V: Fn(usize) -> &'a [P] + ?Sized,
+    D: FnMut(usize, Walked<'_, W>) + ?Sized,
 >(
     d: &mut Decoder<W>,
     p: &Problem<W>,
     count: usize,
-    vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, Walked<'_, W>),
+    vector: &V,
+    done: &mut D,
 ) {
     let limit = p.budget_limit_s();
     let len = if LEN == 0 { p.stride() } else { LEN };
@@ -623,26 +633,38 @@ fn stream_l<
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-fn stream_avx512<'a, const W: usize, P: Priority + 'a>(
+fn stream_avx512<
+    'a,
+    const W: usize,
+    P: Priority + 'a,
+    V: Fn(usize) -> &'a [P] + ?Sized,
+    D: FnMut(usize, Walked<'_, W>) + ?Sized,
+>(
     d: &mut Decoder<W>,
     p: &Problem<W>,
     count: usize,
-    vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, Walked<'_, W>),
+    vector: &V,
+    done: &mut D,
 ) {
-    stream::<true, false, W, P>(d, p, count, vector, done)
+    stream::<true, false, W, P, V, D>(d, p, count, vector, done)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn stream_avx2<'a, const W: usize, P: Priority + 'a>(
+fn stream_avx2<
+    'a,
+    const W: usize,
+    P: Priority + 'a,
+    V: Fn(usize) -> &'a [P] + ?Sized,
+    D: FnMut(usize, Walked<'_, W>) + ?Sized,
+>(
     d: &mut Decoder<W>,
     p: &Problem<W>,
     count: usize,
-    vector: &dyn Fn(usize) -> &'a [P],
-    done: &mut dyn FnMut(usize, Walked<'_, W>),
+    vector: &V,
+    done: &mut D,
 ) {
-    stream::<false, true, W, P>(d, p, count, vector, done)
+    stream::<false, true, W, P, V, D>(d, p, count, vector, done)
 }
 /// Sums the figures of `out` edge by edge in route order (the order, and
 /// so the rounding, of a walk accumulating them step by step) and returns
@@ -826,25 +848,35 @@ impl<const W: usize> Decoder<W> {
     /// objective compares, with no further pass over the route. The order
     /// of the calls depends only on the vectors (not on the kernel).
     #[inline]
-    pub fn decode_stream<'a, P: Priority + 'a>(
+    pub fn decode_stream<
+        'a,
+        P: Priority + 'a,
+        V: Fn(usize) -> &'a [P] + ?Sized,
+        D: FnMut(usize, Walked<'_, W>) + ?Sized,
+    >(
         &mut self,
         p: &Problem<W>,
         count: usize,
-        vector: &dyn Fn(usize) -> &'a [P],
-        done: &mut dyn FnMut(usize, Walked<'_, W>),
+        vector: &V,
+        done: &mut D,
     ) {
         self.stream_with(Kernel::detect(), p, count, vector, done)
     }
 
     /// [`Decoder::decode_stream`] on a chosen kernel (a kernel this CPU
     /// lacks falls back to the portable one).
-    pub fn stream_with<'a, P: Priority + 'a>(
+    pub fn stream_with<
+        'a,
+        P: Priority + 'a,
+        V: Fn(usize) -> &'a [P] + ?Sized,
+        D: FnMut(usize, Walked<'_, W>) + ?Sized,
+    >(
         &mut self,
         kernel: Kernel,
         p: &Problem<W>,
         count: usize,
-        vector: &dyn Fn(usize) -> &'a [P],
-        done: &mut dyn FnMut(usize, Walked<'_, W>),
+        vector: &V,
+        done: &mut D,
     ) {
         match kernel.usable() {
             #[cfg(target_arch = "x86_64")]
@@ -853,7 +885,7 @@ impl<const W: usize> Decoder<W> {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `usable` only yields Avx2 on CPUs with AVX2.
             Kernel::Avx2 => unsafe { stream_avx2(self, p, count, vector, done) },
-            _ => stream::<false, false, W, P>(self, p, count, vector, done),
+            _ => stream::<false, false, W, P, V, D>(self, p, count, vector, done),
         }
     }
 }
