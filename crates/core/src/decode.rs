@@ -183,9 +183,14 @@ mod avx512 {
     /// Per column of one row: the running max of the keys of allowed
     /// columns whose reach fits in `slack`, sixteen columns a register
     /// (not yet reduced across the register).
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn scan<const W: usize, const LEN: usize>(
+    ///
+    /// # Safety
+    /// The CPU has AVX-512F and the caller is compiled with it enabled
+    /// (no `#[target_feature]` here, so that it inlines into the stream's
+    /// loop: as a function of its own it was called once per round of
+    /// eight walks, with the eight rows passed through the stack).
+    #[inline(always)]
+    unsafe fn scan<const W: usize, const LEN: usize>(
         reach: &[f32],
         key: &[i32],
         slack: f32,
@@ -232,8 +237,31 @@ mod avx512 {
         len: usize,
         allowed: NodeSet<W>,
     ) -> i32 {
-        _mm512_reduce_max_epi32(scan::<W, 0>(reach, key, slack, len, allowed))
+        // SAFETY: this function is compiled with AVX-512F, which its
+        // callers check.
+        _mm512_reduce_max_epi32(unsafe { scan::<W, 0>(reach, key, slack, len, allowed) })
     }
+
+    /// [`best_keys`] as a function of its own, for rows longer than
+    /// [`INLINE_MAX_LEN`]: inlined there, eight unrolled scans of 128
+    /// columns measured no faster (PSO at 128 nodes: per-round ratios
+    /// 0.91–1.56 against the call).
+    #[target_feature(enable = "avx512f")]
+    #[inline(never)]
+    pub(super) fn best_keys_call<const W: usize, const LEN: usize>(
+        rows: &[&[f32]; IN_FLIGHT],
+        keys: &[super::PerNode<i32, W>; IN_FLIGHT],
+        slack: &[f32; IN_FLIGHT],
+        len: usize,
+        allowed: &[NodeSet<W>; IN_FLIGHT],
+    ) -> [i32; IN_FLIGHT] {
+        // SAFETY: compiled with AVX-512F.
+        unsafe { best_keys::<W, LEN>(rows, keys, slack, len, allowed) }
+    }
+
+    /// Longest row (padded length) whose eight scans inline into the
+    /// stream's loop (40-node networks have rows of 48).
+    pub(super) const INLINE_MAX_LEN: usize = 64;
 
     /// `f32_down(left)` in one scalar conversion with rounding towards −∞
     /// (the same value as the portable helper). Per lane rather than one
@@ -251,19 +279,25 @@ mod avx512 {
     /// The best keys of eight rows at once: the eight scans, then one
     /// joint reduction (a butterfly over the eight registers, a third of
     /// the shuffles of eight separate reductions).
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    pub(super) fn best_keys<const W: usize, const LEN: usize>(
-        rows: [&[f32]; IN_FLIGHT],
+    ///
+    /// # Safety
+    /// As for [`scan`]: AVX-512F, and a caller compiled with it (it inlines
+    /// into the stream's loop).
+    #[inline(always)]
+    pub(super) unsafe fn best_keys<const W: usize, const LEN: usize>(
+        rows: &[&[f32]; IN_FLIGHT],
         keys: &[super::PerNode<i32, W>; IN_FLIGHT],
         slack: &[f32; IN_FLIGHT],
         len: usize,
         allowed: &[NodeSet<W>; IN_FLIGHT],
     ) -> [i32; IN_FLIGHT] {
-        // SAFETY: `out` is two rows of 16 i32s (unaligned stores).
+        // SAFETY: AVX-512F (the caller's contract); `out` is two rows of
+        // 16 i32s (unaligned stores).
         unsafe {
-            let a: [__m512i; IN_FLIGHT] =
-                core::array::from_fn(|l| scan::<W, LEN>(rows[l], &keys[l], slack[l], len, allowed[l]));
+            let mut a = [_mm512_setzero_si512(); IN_FLIGHT];
+            for l in 0..IN_FLIGHT {
+                a[l] = scan::<W, LEN>(rows[l], &keys[l], slack[l], len, allowed[l]);
+            }
             // Halves of two lanes' registers side by side, then their max:
             // each result holds lane 2j in 128-bit chunks 0–1, 2j+1 in 2–3.
             let halves = |x: __m512i, y: __m512i| {
@@ -295,7 +329,9 @@ mod avx512 {
             for (o, x) in out.iter_mut().zip(q) {
                 _mm512_storeu_si512(o.as_mut_ptr().cast(), within(x));
             }
-            core::array::from_fn(|l| out[l / 4][4 * (l % 4)])
+            [
+                out[0][0], out[0][4], out[0][8], out[0][12], out[1][0], out[1][4], out[1][8], out[1][12],
+            ]
         }
     }
 }
@@ -466,10 +502,20 @@ impl<const W: usize> Lanes<W> {
                 // true, and they run only on CPUs with AVX-512F.
                 unsafe {
                     if L == IN_FLIGHT {
-                        slack = core::array::from_fn(|l| avx512::slack(limit - self.time_s[l]));
-                        let rows = core::array::from_fn(|l| p.reach_from(self.cur[l]));
-                        let allowed = core::array::from_fn(|l| !self.visited[l]);
-                        best = avx512::best_keys::<W, LEN>(rows, &self.key, &slack, len, &allowed);
+                        // Plain loops, not `array::from_fn`: the compiler
+                        // left that out of line here, a call per round.
+                        let mut rows: [&[f32]; IN_FLIGHT] = [&[]; IN_FLIGHT];
+                        let mut allowed = [NodeSet::EMPTY; IN_FLIGHT];
+                        for l in 0..IN_FLIGHT {
+                            slack[l] = avx512::slack(limit - self.time_s[l]);
+                            rows[l] = p.reach_from(self.cur[l]);
+                            allowed[l] = !self.visited[l];
+                        }
+                        best = if LEN != 0 && LEN <= avx512::INLINE_MAX_LEN {
+                            avx512::best_keys::<W, LEN>(&rows, &self.key, &slack, len, &allowed)
+                        } else {
+                            avx512::best_keys_call::<W, LEN>(&rows, &self.key, &slack, len, &allowed)
+                        };
                     } else {
                         for l in 0..L {
                             slack[l] = avx512::slack(limit - self.time_s[l]);
