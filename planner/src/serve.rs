@@ -189,9 +189,10 @@ impl ServiceArgs {
                 self.drift_allowance
             )));
         }
-        let mut arrival_allowance_s = world.arrival_allowances_s();
-        for a in &mut arrival_allowance_s {
-            *a *= self.drift_allowance;
+        // A service world holds at most MAX_NODES waypoints (checked when loaded).
+        let mut arrival_allowance_s = [0.0; auv_core::problem::MAX_NODES];
+        for (a, w) in arrival_allowance_s.iter_mut().zip(world.arrival_allowances_s()) {
+            *a = w * self.drift_allowance;
         }
         Ok(ServiceConfig {
             deadline: Duration::from_secs_f64(self.deadline_ms / 1000.0),

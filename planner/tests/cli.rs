@@ -441,6 +441,50 @@ fn export_follows_a_scenario_file() {
 }
 
 #[test]
+fn the_generator_exports_networks_beyond_the_service_class_and_they_solve() {
+    let dir = scratch("export-large");
+    let scenario = write_json(&dir, "n200.json", &json!({"format": "auv-scenario/1", "nodes": 200}));
+    let out_path = dir.join("snap.json");
+    let out = planner(&[
+        "export",
+        "--seed",
+        "3",
+        "--scenario",
+        path_str(&scenario),
+        "--out",
+        path_str(&out_path),
+    ]);
+    assert_ok(&out);
+    let inst = Instance::from_json(&std::fs::read_to_string(&out_path).unwrap()).unwrap();
+    assert_eq!((inst.nodes.len(), inst.goal), (200, 199));
+    assert!(inst.edges.len() > 1000, "{} edges", inst.edges.len());
+    let doc: Value = serde_json::from_str(&std::fs::read_to_string(&out_path).unwrap()).unwrap();
+    let (sol, _) = solve_json(&out_path, &["--algorithm", "pso", "--iterations", "10"]);
+    assert_eq!(sol["feasible"], true, "{sol}");
+    assert_figures_match(&doc, &sol);
+    // The real-time service carries up to 128 waypoints: a clear one-line refusal.
+    // (`serve` exits 1 for a world it cannot build, as for any scenario error.)
+    let out = planner(&["serve", "--scenario", path_str(&scenario), "--planner-seed", "1"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("`nodes` = 200") && err.contains("real-time service's capacity of 128"),
+        "{err}"
+    );
+    let out = planner(&[
+        "montecarlo",
+        "--scenario",
+        path_str(&scenario),
+        "--runs",
+        "1",
+        "--out",
+        path_str(&dir.join("mc")),
+    ]);
+    assert_input_error(&out, &["`nodes` = 200", "up to 128 waypoints"]);
+}
+
+#[test]
 fn an_exported_snapshot_solves_with_checkable_figures() {
     let (path, out) = export("export-solve", &["--seed", "5"]);
     assert_ok(&out);
@@ -778,8 +822,8 @@ fn bad_input_malformed_scenario_file() {
         (json!({"nodez": 40}), "unknown field `nodez`"),
         (json!({"format": "auv-scenario/9"}), "`format`"),
         (
-            json!({"nodes": 129}),
-            "`nodes` = 129 exceeds the real-time planner's capacity of 128",
+            json!({"nodes": 513}),
+            "`nodes` = 513 exceeds the planner's largest capacity class of 512",
         ),
         (json!({"nodes": 10, "dynamic": 9}), "`dynamic` = 9"),
         (json!({"sigma_m": -150}), "`sigma_m` = -150"),

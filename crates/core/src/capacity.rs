@@ -19,8 +19,11 @@ use core::ops::{BitAnd, BitAndAssign, BitOr, BitOrAssign, Deref, DerefMut, Not, 
 /// world generator use it.
 pub const DEFAULT_WORDS: usize = 2;
 
+/// Words of the largest class this build supports.
+pub const LARGEST_WORDS: usize = 8;
+
 /// Nodes of the largest class this build supports.
-pub const LARGEST_NODES: usize = 512;
+pub const LARGEST_NODES: usize = nodes_of(LARGEST_WORDS);
 
 /// Nodes a class of `W` words holds.
 #[inline(always)]

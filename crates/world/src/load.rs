@@ -20,6 +20,7 @@ use std::path::PathBuf;
 use crate::frame::LocalFrame;
 use crate::mission_file::{self, MissionError, Overrides, Role, Water, WaypointInfo};
 use crate::scenario::{ChartSource, ConfigError, LoadError, RedrawReport, ScenarioConfig, World};
+use auv_core::capacity::LARGEST_NODES;
 use auv_core::instance::Instance;
 use auv_core::problem::DEFAULT_RESERVE_S;
 use auv_core::problem::MAX_NODES;
@@ -124,6 +125,9 @@ impl ScenarioArgs {
             cfg.time_available_s = t;
         }
         cfg.validate()?;
+        if cfg.nodes > MAX_NODES {
+            return Err(WorldError::TooManyForService(cfg.nodes));
+        }
         Ok(cfg)
     }
 }
@@ -134,6 +138,12 @@ pub enum WorldError {
     /// Bad node count.
     #[error("--nodes {0}: must be between 2 and {MAX_NODES}")]
     BadNodeCount(usize),
+    /// More waypoints than the real-time service's messages carry.
+    #[error(
+        "scenario field `nodes` = {0} exceeds the real-time service's capacity of {MAX_NODES} waypoints \
+         (`planner export` and the offline solvers take up to {LARGEST_NODES})"
+    )]
+    TooManyForService(usize),
     /// The scenario file or an override is invalid.
     #[error("scenario: {0}")]
     Config(#[from] ConfigError),
@@ -264,7 +274,7 @@ impl MissionWorld {
     }
 
     /// Expected time lost reaching each drifting waypoint, s, by node id.
-    pub fn arrival_allowances_s(&self) -> [f64; auv_core::problem::MAX_NODES] {
+    pub fn arrival_allowances_s(&self) -> Vec<f64> {
         self.world.arrival_allowances_s(&self.water)
     }
 
@@ -364,6 +374,21 @@ mod tests {
     }
 
     #[test]
+    fn a_scenario_beyond_the_service_class_is_a_clear_error_here() {
+        let path = std::env::temp_dir().join(format!("auv-load-n200-{}.json", std::process::id()));
+        std::fs::write(&path, r#"{"format": "auv-scenario/1", "nodes": 200}"#).unwrap();
+        let e = load_world(&ScenarioArgs {
+            scenario: Some(path.clone()),
+            ..Default::default()
+        })
+        .err()
+        .unwrap();
+        let _ = std::fs::remove_file(&path);
+        assert!(matches!(e, WorldError::TooManyForService(200)), "{e}");
+        assert!(e.to_string().contains("capacity of 128 waypoints"), "{e}");
+    }
+
+    #[test]
     fn flags_round_trip_and_bad_values_are_errors() {
         let a = ScenarioArgs {
             seed: Some(9),
@@ -381,6 +406,7 @@ mod tests {
         let back = <P as clap::Parser>::try_parse_from(argv).unwrap().s;
         assert_eq!(back, a);
         assert!(matches!(load_world(&args(1, 1)), Err(WorldError::BadNodeCount(1))));
+        assert!(matches!(load_world(&args(1, 129)), Err(WorldError::BadNodeCount(129))));
         let mut neg = args(1, 10);
         neg.time_available_s = Some(-1.0);
         assert!(matches!(load_world(&neg), Err(WorldError::Config(_))));

@@ -50,7 +50,7 @@ fn per_update_calls_do_not_allocate() {
     let cfg = ScenarioConfig::default();
     let mut sensor = World::generate(&cfg, 4, &map).unwrap();
     let mut planner = sensor.clone();
-    let mut problem = Problem::new();
+    let mut problem: Problem = Problem::new();
     let mut positions = sensor.positions().to_vec();
     let mut rng = sensor.redraw_rng(0);
     let before = allocations();

@@ -263,6 +263,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
             bbo.elites, bbo.habitats
         )));
     }
+    if mission.is_none() && config.nodes > auv_core::problem::MAX_NODES {
+        let origin = match args.nodes {
+            Some(n) => format!("--nodes {n}"),
+            None => format!("scenario field `nodes` = {}", config.nodes),
+        };
+        return Err(CliError::Usage(format!(
+            "{origin}: the Monte Carlo study runs networks of up to {} waypoints; \
+             a larger generated network goes through `planner export`, then `solve`, `quality` or `scaling`",
+            auv_core::problem::MAX_NODES
+        )));
+    }
     std::fs::create_dir_all(&args.out).map_err(|source| CliError::Write {
         path: args.out.clone(),
         source,

@@ -753,7 +753,7 @@ pub(super) fn resolve(text: &str, dir: &Path, overrides: Overrides) -> Result<Mi
             "vehicle.reserve_s = {reserve_s} leaves nothing of time_available_s = {time_available_s}"
         )));
     }
-    let mut problem = auv_core::problem::Problem::new();
+    let mut problem: auv_core::problem::Problem = auv_core::problem::Problem::new();
     match world.fill_problem(&mut problem, world.start(), NodeSet::EMPTY, plan_budget) {
         Ok(()) => {
             let shortest = problem.to_goal_s(world.start());

@@ -16,7 +16,6 @@
 use super::{World, sub_stream};
 use crate::chart::WaterMap;
 use auv_core::instance::distance_3d_m as dist;
-use auv_core::problem::MAX_NODES;
 
 /// Stream of the chase simulations (one sub-stream per waypoint).
 pub const STREAM_CHASE: u64 = 0x5CE7_0007;
@@ -77,9 +76,10 @@ impl World {
         total / f64::from(CHASE_TRIALS)
     }
 
-    /// [`Self::arrival_allowance_s`] of every waypoint, indexed by node id.
-    pub fn arrival_allowances_s(&self, map: &impl WaterMap) -> [f64; MAX_NODES] {
-        let mut out = [0.0; MAX_NODES];
+    /// [`Self::arrival_allowance_s`] of every waypoint, indexed by node id
+    /// (n entries).
+    pub fn arrival_allowances_s(&self, map: &impl WaterMap) -> Vec<f64> {
+        let mut out = vec![0.0; self.n()];
         for i in self.dynamic.iter() {
             out[i] = self.arrival_allowance_s(i, map);
         }

@@ -5,7 +5,7 @@
 //! [`ScenarioConfig::from_json`] accepts a JSON object whose fields are all
 //! optional (absent ⇒ default) and rejects, with a one-line [`ConfigError`]
 //! naming the field's path, anything else: unknown fields, wrong types,
-//! out-of-range numbers, more nodes than [`MAX_NODES`], more dynamic
+//! out-of-range numbers, more nodes than [`LARGEST_NODES`], more dynamic
 //! waypoints than `nodes − 2`. The document is read by serde derive
 //! (`deny_unknown_fields`; `serde_path_to_error` gives the path), then
 //! [`ScenarioConfig::validate`] checks the ranges. [`ScenarioConfig::to_json`] writes every field, and reads back
@@ -27,8 +27,8 @@ use std::path::{Path, PathBuf};
 
 use serde_json::json;
 
+use auv_core::capacity::LARGEST_NODES;
 use auv_core::instance::Objective;
-use auv_core::problem::MAX_NODES;
 
 /// The value of the optional `format` field of a scenario file.
 pub const SCENARIO_FORMAT: &str = "auv-scenario/1";
@@ -81,7 +81,8 @@ impl UniformRange {
 /// the [module table](super).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScenarioConfig {
-    /// Waypoint count n (node 0 the start, node n−1 the goal); 2..=[`MAX_NODES`].
+    /// Waypoint count n (node 0 the start, node n−1 the goal); 2..=[`LARGEST_NODES`]
+    /// (the real-time service takes up to [`auv_core::problem::MAX_NODES`]).
     pub nodes: usize,
     /// Dynamic waypoint count d ≤ n − 2; they are ids 1..=d.
     pub dynamic: usize,
@@ -188,8 +189,8 @@ pub enum ConfigError {
         /// The rule it breaks.
         rule: &'static str,
     },
-    /// `nodes` above the compile-time capacity.
-    #[error("scenario field `nodes` = {0} exceeds the real-time planner's capacity of {MAX_NODES} nodes")]
+    /// `nodes` above the largest capacity class.
+    #[error("scenario field `nodes` = {0} exceeds the planner's largest capacity class of {LARGEST_NODES} nodes")]
     TooManyNodes(usize),
     /// `nodes` below 2 (a start and a goal).
     #[error("scenario field `nodes` = {0}: a route needs at least 2 nodes (start and goal)")]
@@ -247,7 +248,7 @@ fn check_range(field: &'static str, r: UniformRange, lo_ok: bool, lo_rule: &'sta
 impl ScenarioConfig {
     /// Checks every field; the first violation is returned.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        if self.nodes > MAX_NODES {
+        if self.nodes > LARGEST_NODES {
             return Err(ConfigError::TooManyNodes(self.nodes));
         }
         if self.nodes < 2 {
@@ -631,8 +632,8 @@ mod tests {
             (r#"{"nodez": 40}"#, "unknown field `nodez`"),
             (r#"{"format": "auv-scenario/2"}"#, "`format`"),
             (
-                r#"{"nodes": 129}"#,
-                "`nodes` = 129 exceeds the real-time planner's capacity of 128",
+                r#"{"nodes": 513}"#,
+                "`nodes` = 513 exceeds the planner's largest capacity class of 512",
             ),
             (r#"{"nodes": 1, "dynamic": 0}"#, "`nodes` = 1"),
             (r#"{"nodes": -3}"#, "`nodes`: invalid value: integer `-3`"),

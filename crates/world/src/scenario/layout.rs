@@ -14,10 +14,10 @@
 
 use super::{
     ConfigError, STREAM_BOUNDS, STREAM_POSITIONS, STREAM_TASKS, ScenarioConfig, Task, UniformRange, Vec3, World,
-    draw_over_water, pair_index, scenario_fingerprint, sub_stream,
+    WorldSet, draw_over_water, pair_index, scenario_fingerprint, sub_stream,
 };
 use crate::chart::WaterMap;
-use auv_core::problem::{MAX_NODES, NodeSet};
+use auv_core::capacity::LARGEST_NODES;
 use auv_core::rng::{PlannerRng, derive_seed};
 
 use super::fingerprint::Fnv1a;
@@ -88,8 +88,8 @@ pub enum LayoutError {
     /// The configuration is invalid.
     #[error(transparent)]
     Config(#[from] ConfigError),
-    /// Not 2..=[`MAX_NODES`] waypoints, or no start.
-    #[error("{0} waypoints: a mission needs a start and a goal and at most {MAX_NODES} waypoints")]
+    /// Not 2..=[`LARGEST_NODES`] waypoints, or no start.
+    #[error("{0} waypoints: a mission needs a start and a goal and at most {LARGEST_NODES} waypoints")]
     NodeCount(usize),
     /// The chart's extent is not a positive finite size.
     #[error("chart extent {0} m × {1} m must be finite and > 0")]
@@ -119,7 +119,7 @@ impl World {
         map: &impl WaterMap,
     ) -> Result<Self, LayoutError> {
         let n = layout.n();
-        if layout.head.is_empty() || !(2..=MAX_NODES).contains(&n) {
+        if layout.head.is_empty() || !(2..=LARGEST_NODES).contains(&n) {
             return Err(LayoutError::NodeCount(n));
         }
         let (width_m, height_m) = (map.width_m(), map.height_m());
@@ -134,7 +134,7 @@ impl World {
         let mut bound = vec![Vec3::default(); n];
         let mut sigma = vec![config.sigma_m; n];
         let mut prize = vec![0.0; n];
-        let mut dynamic = NodeSet::EMPTY;
+        let mut dynamic = WorldSet::EMPTY;
         for (i, node) in layout
             .head
             .iter()
@@ -247,7 +247,7 @@ impl World {
             sigma,
             prize,
             tasks,
-            adjacency: [NodeSet::EMPTY; MAX_NODES],
+            adjacency: vec![WorldSet::EMPTY; n],
         };
         world.place_initially(map);
         Ok(world)

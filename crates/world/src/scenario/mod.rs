@@ -32,7 +32,7 @@
 //!
 //! | field | default | meaning | source |
 //! | --- | --- | --- | --- |
-//! | `nodes` | 40 | waypoints n; node 0 the start, node n−1 the goal; 2..=128 ([`MAX_NODES`]) | the paper's model (network size) |
+//! | `nodes` | 40 | waypoints n; node 0 the start, node n−1 the goal; 2..=512 ([`auv_core::capacity::LARGEST_NODES`]; the real-time service takes up to 128) | the paper's model (network size) |
 //! | `dynamic` | 10 | dynamic waypoints d ≤ n−2 | the paper's model |
 //! | which nodes are dynamic | ids 1..=d | start and goal stay static; lowest ids so that changing n keeps them | our choice: the paper is silent |
 //! | static position | x ~ U(0, width), y ~ U(0, height), resampled until over water; z ~ U(0, `depth_max_m`) | also a dynamic waypoint's nominal position | the paper's model |
@@ -84,8 +84,9 @@ pub use map::{EMBEDDED_CHART_NAME, LoadError, STREAM_CHART, ScenarioMap, chart_s
 
 use crate::chart::WaterMap;
 use crate::truncnorm::TruncatedNormal;
+use auv_core::capacity::LARGEST_WORDS;
 use auv_core::instance::{Edge, Instance, Node};
-use auv_core::problem::{MAX_NODES, NodeSet, Problem, ProblemError, edge_time_s};
+use auv_core::problem::{NodeSet, Problem, ProblemError, edge_time_s};
 use auv_core::rng::{PlannerRng, derive_seed};
 
 /// Stream of the nominal (and static) positions.
@@ -189,11 +190,16 @@ pub enum PositionError {
     },
 }
 
+/// A set of the world's waypoints. A world holds up to
+/// [`auv_core::capacity::LARGEST_NODES`] of them, so its sets are those of the
+/// largest class; a planner fills a problem of its own class from it.
+pub type WorldSet = NodeSet<LARGEST_WORDS>;
+
 /// What a move of the dynamic waypoints changed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RedrawReport {
     /// Waypoints whose position changed.
-    pub moved: NodeSet,
+    pub moved: WorldSet,
     /// Edges that appeared.
     pub edges_added: u32,
     /// Edges that disappeared.
@@ -231,7 +237,7 @@ pub struct World {
     fingerprint: u64,
     width_m: f64,
     height_m: f64,
-    dynamic: NodeSet,
+    dynamic: WorldSet,
     nominal: Vec<Vec3>,
     bound: Vec<Vec3>,
     /// σ of each dynamic waypoint's drift per axis, m (the configuration's
@@ -242,8 +248,8 @@ pub struct World {
     position: Vec<Vec3>,
     /// One task per pair, indexed by [`pair_index`].
     tasks: Vec<Task>,
-    /// The edge cache: bit b of row a ⇔ edge a–b.
-    adjacency: [NodeSet; MAX_NODES],
+    /// The edge cache: bit b of row a ⇔ edge a–b, one row per node.
+    adjacency: Vec<WorldSet>,
 }
 
 impl World {
@@ -266,7 +272,7 @@ impl World {
                 })?,
             );
         }
-        let mut dynamic = NodeSet::EMPTY;
+        let mut dynamic = WorldSet::EMPTY;
         for i in 1..=config.dynamic {
             dynamic.insert(i);
         }
@@ -309,7 +315,7 @@ impl World {
             sigma: vec![config.sigma_m; n],
             prize: vec![0.0; n],
             tasks,
-            adjacency: [NodeSet::EMPTY; MAX_NODES],
+            adjacency: vec![WorldSet::EMPTY; n],
         };
         world.place_initially(map);
         Ok(world)
@@ -324,11 +330,7 @@ impl World {
             // A fallback here is legal (nominal is water); nothing to report.
             self.position[i] = self.draw_dynamic(i, &mut rng, map).0;
         }
-        let mut all = NodeSet::EMPTY;
-        for i in 0..self.n() {
-            all.insert(i);
-        }
-        self.update_edges(all, map);
+        self.update_edges(WorldSet::first(self.n()), map);
     }
 
     /// Redraws every dynamic waypoint around its nominal position (the
@@ -446,7 +448,7 @@ impl World {
     }
 
     /// Rechecks every pair touching a node of `moved`; returns (added, removed).
-    fn update_edges(&mut self, moved: NodeSet, map: &impl WaterMap) -> (u32, u32) {
+    fn update_edges(&mut self, moved: WorldSet, map: &impl WaterMap) -> (u32, u32) {
         let n = self.n();
         let (mut added, mut removed) = (0, 0);
         for i in moved.iter() {
@@ -515,12 +517,14 @@ impl World {
 
     /// Refills `problem` straight from the current network, as
     /// `problem.load_instance(&self.snapshot(..), start, excluded, budget_s)`
-    /// would, without building the snapshot. Does not allocate.
-    pub fn fill_problem(
+    /// would, without building the snapshot, in the problem's own capacity
+    /// class (too small a class is [`ProblemError::TooManyNodes`]). Does not
+    /// allocate.
+    pub fn fill_problem<const W: usize>(
         &self,
-        problem: &mut Problem,
+        problem: &mut Problem<W>,
         start: usize,
-        excluded: NodeSet,
+        excluded: NodeSet<W>,
         budget_s: f64,
     ) -> Result<(), ProblemError> {
         self.fill_problem_with(problem, start, excluded, budget_s, |_, _| true)
@@ -529,11 +533,11 @@ impl World {
     /// [`World::fill_problem`] keeping only the edges (a, b), a < b, for
     /// which `keep(a, b)` holds: a thinner network of the same waypoints
     /// (e.g. for studies of network density). Does not allocate.
-    pub fn fill_problem_with(
+    pub fn fill_problem_with<const W: usize>(
         &self,
-        problem: &mut Problem,
+        problem: &mut Problem<W>,
         start: usize,
-        excluded: NodeSet,
+        excluded: NodeSet<W>,
         budget_s: f64,
         keep: impl Fn(usize, usize) -> bool,
     ) -> Result<(), ProblemError> {
@@ -584,7 +588,7 @@ impl World {
     }
     /// The dynamic waypoints (ids 1..=d).
     #[inline]
-    pub fn dynamic_nodes(&self) -> NodeSet {
+    pub fn dynamic_nodes(&self) -> WorldSet {
         self.dynamic
     }
     /// Whether waypoint `i` is dynamic.
@@ -629,12 +633,12 @@ impl World {
     /// Whether edge a–b exists now (false for ids out of range).
     #[inline]
     pub fn has_edge(&self, a: usize, b: usize) -> bool {
-        a < MAX_NODES && b < MAX_NODES && self.adjacency[a].contains(b)
+        a < self.n() && b < self.n() && self.adjacency[a].contains(b)
     }
     /// Current neighbours of `i` (empty for ids out of range).
     #[inline]
-    pub fn neighbours(&self, i: usize) -> NodeSet {
-        self.adjacency.get(i).copied().unwrap_or(NodeSet::EMPTY)
+    pub fn neighbours(&self, i: usize) -> WorldSet {
+        self.adjacency.get(i).copied().unwrap_or(WorldSet::EMPTY)
     }
     /// Number of edges now.
     pub fn edge_count(&self) -> usize {

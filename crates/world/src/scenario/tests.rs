@@ -419,7 +419,7 @@ fn snapshot_is_a_valid_instance_and_round_trips() {
 }
 
 /// Every table of two problems, bit for bit.
-fn assert_same_problem(p: &Problem, q: &Problem) {
+fn assert_same_problem<const W: usize>(p: &Problem<W>, q: &Problem<W>) {
     assert_eq!((p.n(), p.start(), p.goal()), (q.n(), q.start(), q.goal()));
     assert_eq!(p.budget_s().to_bits(), q.budget_s().to_bits());
     assert_eq!(p.excluded(), q.excluded());
@@ -439,7 +439,7 @@ fn assert_same_problem(p: &Problem, q: &Problem) {
 fn fill_problem_equals_loading_the_snapshot() {
     let map = islands();
     let mut w = world(13);
-    let (mut direct, mut via) = (Problem::new(), Problem::new());
+    let (mut direct, mut via): (Problem, Problem) = (Problem::new(), Problem::new());
     let mut cases = 0;
     for k in 0..4 {
         w.redraw_dynamic(&mut w.redraw_rng(k), &map);
@@ -468,6 +468,37 @@ fn fill_problem_equals_loading_the_snapshot() {
 }
 
 #[test]
+fn a_world_beyond_the_service_class_fills_the_classes_that_hold_it() {
+    let map = islands();
+    let cfg = ScenarioConfig {
+        nodes: 300,
+        dynamic: 60,
+        ..ScenarioConfig::default()
+    };
+    let mut w = World::generate(&cfg, 5, &map).unwrap();
+    w.redraw_dynamic(&mut w.redraw_rng(1), &map);
+    assert_eq!(w.n(), 300);
+    assert_eq!(w.dynamic_nodes().len(), 60);
+    assert!(w.dynamic_nodes().contains(60) && !w.dynamic_nodes().contains(61));
+    let inst = w.snapshot("big");
+    assert_eq!(inst.edges.len(), w.edge_count());
+    // Ids above 256 have edges too (the rows of the largest class are used).
+    assert!(inst.edges.iter().any(|e| e.a > 256 || e.b > 256));
+    let mut excluded = NodeSet::<8>::EMPTY;
+    excluded.insert(270);
+    let (mut direct, mut via) = (Problem::<8>::new(), Problem::<8>::new());
+    w.fill_problem(&mut direct, 0, excluded, 31_000.0).unwrap();
+    via.load_instance(&inst, 0, excluded, 31_000.0).unwrap();
+    assert_same_problem(&direct, &via);
+    // A class too small for the world is the problem's own error.
+    let mut small: Problem = Problem::new();
+    assert_eq!(
+        w.fill_problem(&mut small, 0, NodeSet::EMPTY, 31_000.0),
+        Err(ProblemError::TooManyNodes { n: 300, capacity: 128 })
+    );
+}
+
+#[test]
 fn generation_errors_are_clear() {
     let map = islands();
     let cfg = |edit: fn(&mut ScenarioConfig)| {
@@ -475,10 +506,10 @@ fn generation_errors_are_clear() {
         edit(&mut c);
         c
     };
-    let err = World::generate(&cfg(|c| c.nodes = 129), 1, &map).unwrap_err();
-    assert_eq!(err, ScenarioError::Config(ConfigError::TooManyNodes(129)));
-    assert!(err.to_string().contains("capacity of 128"), "{err}");
-    World::generate(&cfg(|c| c.nodes = 128), 1, &map).unwrap();
+    let err = World::generate(&cfg(|c| c.nodes = 513), 1, &map).unwrap_err();
+    assert_eq!(err, ScenarioError::Config(ConfigError::TooManyNodes(513)));
+    assert!(err.to_string().contains("largest capacity class of 512"), "{err}");
+    World::generate(&cfg(|c| c.nodes = 512), 1, &map).unwrap();
     World::generate(
         &cfg(|c| {
             c.nodes = 2;
@@ -577,7 +608,7 @@ fn works_on_a_raster_chart_with_a_coastline() {
         w.redraw_dynamic(&mut w.redraw_rng(k), &map);
         assert_invariants(&w, &map);
     }
-    let mut p = Problem::new();
+    let mut p: Problem = Problem::new();
     w.fill_problem(&mut p, 0, NodeSet::EMPTY, 31_000.0).unwrap();
 }
 
@@ -609,7 +640,7 @@ fn measure_generation_and_redraw_times() {
             std::hint::black_box(w.redraw_dynamic(&mut rng, &map));
         }
         let redraw_us = t.elapsed().as_secs_f64() * 1e6 / reps as f64;
-        let mut p = Problem::new();
+        let mut p: Problem = Problem::new();
         let t = Instant::now();
         for _ in 0..reps {
             // The goal may be cut off in some redraw; the time counts anyway.
