@@ -422,16 +422,7 @@ fn export_follows_a_scenario_file() {
         &json!({"format": "auv-scenario/1", "nodes": 12, "dynamic": 3, "time_available_s": 9000,
                 "objective": {"kind": "paper_cost", "phi1": 0.01, "phi2": 1.0}}),
     );
-    let out_path = dir.join("snap.json");
-    let out = planner(&[
-        "export",
-        "--seed",
-        "7",
-        "--scenario",
-        path_str(&scenario),
-        "--out",
-        path_str(&out_path),
-    ]);
+    let (out_path, out) = export_scenario(&dir, &scenario, "7");
     assert_ok(&out);
     let inst = Instance::from_json(&std::fs::read_to_string(&out_path).unwrap()).unwrap();
     assert_eq!(inst.nodes.len(), 12);
@@ -444,16 +435,7 @@ fn export_follows_a_scenario_file() {
 fn the_generator_exports_networks_beyond_the_service_class_and_they_solve() {
     let dir = scratch("export-large");
     let scenario = write_json(&dir, "n200.json", &json!({"format": "auv-scenario/1", "nodes": 200}));
-    let out_path = dir.join("snap.json");
-    let out = planner(&[
-        "export",
-        "--seed",
-        "3",
-        "--scenario",
-        path_str(&scenario),
-        "--out",
-        path_str(&out_path),
-    ]);
+    let (out_path, out) = export_scenario(&dir, &scenario, "3");
     assert_ok(&out);
     let inst = Instance::from_json(&std::fs::read_to_string(&out_path).unwrap()).unwrap();
     assert_eq!((inst.nodes.len(), inst.goal), (200, 199));
@@ -800,19 +782,26 @@ fn bad_input_oplib_names_the_line() {
     assert_input_error(&out, &["broken.oplib", "line", "is invalid"]);
 }
 
-fn export_with_scenario(test: &str, scenario: &Value) -> Output {
-    let dir = scratch(test);
-    let path = write_json(&dir, "scenario.json", scenario);
+/// `planner export --seed SEED --scenario SCENARIO` into `DIR/snap.json`.
+fn export_scenario(dir: &Path, scenario: &Path, seed: &str) -> (PathBuf, Output) {
+    let out_path = dir.join("snap.json");
     let out = planner(&[
         "export",
         "--seed",
-        "1",
+        seed,
         "--scenario",
-        path_str(&path),
+        path_str(scenario),
         "--out",
-        path_str(&dir.join("out.json")),
+        path_str(&out_path),
     ]);
-    assert!(!dir.join("out.json").exists(), "nothing is written on error");
+    (out_path, out)
+}
+
+fn export_with_scenario(test: &str, scenario: &Value) -> Output {
+    let dir = scratch(test);
+    let path = write_json(&dir, "scenario.json", scenario);
+    let (out_path, out) = export_scenario(&dir, &path, "1");
+    assert!(!out_path.exists(), "nothing is written on error");
     out
 }
 
