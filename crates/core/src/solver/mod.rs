@@ -26,6 +26,7 @@ mod lanes;
 pub mod local;
 pub mod objective;
 pub mod pso;
+pub mod risk_search;
 
 use std::time::{Duration, Instant};
 
