@@ -161,7 +161,7 @@ pub struct AutoSettings {
     /// [`REROUTE_MAX_DENSITY`]): partial paths the low-risk search
     /// ([`RiskSearch`]) expands per step, resuming where it stopped, until
     /// it has looked at every candidate route (0: never). 16 384: about
-    /// 0.2 ms, most of a step there; on the `bc40-pc` training instances it
+    /// 0.5 ms, most of a step there; on the `bc40-pc` training instances it
     /// found better routes than the kicks in the same time (at 4 096 a 20 ms
     /// solve ended before the search reached the routes it finds at 16 384).
     pub risk_search: u32,
@@ -207,7 +207,6 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     /// Whether this problem runs the low-risk search ([`AutoSettings::risk_search`]).
     risk_searching: bool,
     /// Lowest-risk edges per node of the present search's candidate graph.
-    risk_candidates: usize,
     /// Current ruin size cap: grows while kicks find nothing, back to its
     /// base on a new best (adaptive removal size).
     ruin_cap: usize,
@@ -257,7 +256,6 @@ impl<const W: usize> Auto<W> {
             moves: Moves::new(),
             risk: RiskSearch::new(),
             risk_searching: false,
-            risk_candidates: RISK_CANDIDATES_FIRST,
             ruin_cap: 2,
             polished_from: super::WORST,
             cur: Route::new(),
@@ -469,15 +467,14 @@ fn seed_leg<const W: usize>(p: &Problem<W>) -> Option<Route<W>> {
     }
 }
 
-/// The low-risk search's candidate graphs: each node's 8 lowest-risk
-/// edges first, then 12 and 16 once a search is over. On the dense 40-node
-/// `bc40-pc` training networks the proved optima used only edges among
-/// the 5–8 lowest-risk ones at one of their ends, and with 8 the search
-/// completes within about 10 ms there; on other seeds some optima needed
-/// 12.
-const RISK_CANDIDATES_FIRST: usize = 8;
-const RISK_CANDIDATES_STEP: usize = 4;
-const RISK_CANDIDATES_LAST: usize = risk_search::CANDIDATES;
+/// The low-risk search's candidate graph: each node's 16 lowest-risk
+/// edges. With the idle bound a complete search over 16 took about as many
+/// expansions as over 8 on the 40- and 64-node training networks (64:
+/// 278 000 against 316 000 on one, 471 000 against 654 000 on another) and
+/// found better routes on half of the 64-node ones; starting at 16 rather
+/// than widening 8 → 12 → 16 left no gap at 20 ms there (8 first: mean
+/// 2.9–3.1 %, worst 12 %).
+const RISK_CANDIDATES: usize = risk_search::CANDIDATES;
 
 /// Rounds of [`Moves::shorten`] per call, at most (a bound on a step's
 /// work; a route that needs more keeps shortening in the next kick).
@@ -542,8 +539,7 @@ impl<const W: usize> Solver<W> for Auto<W> {
         self.defer_deep = self.settings.deep_after > 0 && !values_time;
         self.risk_searching = self.settings.risk_search > 0 && values_time && !sparse;
         if self.risk_searching {
-            self.risk_candidates = RISK_CANDIDATES_FIRST;
-            self.risk.start(problem, self.risk_candidates);
+            self.risk.start(problem, RISK_CANDIDATES);
         }
     }
 
@@ -588,12 +584,7 @@ impl<const W: usize> Auto<W> {
     /// iterated local search moves there.
     fn risk_search_step(&mut self, problem: &Problem<W>) {
         if self.risk.is_done() {
-            // Over on its candidate graph: search again on a wider one.
-            if self.risk_candidates >= RISK_CANDIDATES_LAST {
-                return;
-            }
-            self.risk_candidates += RISK_CANDIDATES_STEP;
-            self.risk.start(problem, self.risk_candidates);
+            return;
         }
         let best_cost = if self.best_eval.feasible {
             self.best_eval.cost(problem.objective(), problem.budget_s())

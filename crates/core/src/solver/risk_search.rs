@@ -7,9 +7,10 @@
 //! ones at one of their ends, and finding the combination whose times add
 //! up to the budget is a subset-sum-like search that ruin-and-recreate
 //! kicks rarely complete. Restricted to those candidate edges, a plain
-//! depth-first search with a risk bound finds the routes the kicks miss,
-//! and on 40-node networks it finishes in 0.5–2 million expansions (about
-//! 12 ns each: within a 20 ms deadline on some, not on all).
+//! depth-first search with bounds on risk and idle time finds the routes
+//! the kicks miss; over each node's 8 lowest-risk edges it finishes in
+//! 0.05–0.4 million expansions on 40-node networks and 1–4 million on
+//! 64-node ones (about 30 ns each).
 //!
 //! Contract: [`RiskSearch::start`] builds the candidate graph of a problem
 //! and the bound's tables (no allocation: every buffer is sized for the
@@ -19,18 +20,29 @@
 //! search order depends on the problem only, so it is deterministic.
 //!
 //! Candidate graph: each node's `candidates` lowest-ξ/ρ edges (at most
-//! [`CANDIDATES`]; a caller widens the graph by starting again with more
-//! once a search is over), both ends
-//! keeping the pair while either has room for it (at most [`DEGREE`] per
-//! node), neighbours tried lowest bound first.
+//! [`CANDIDATES`]), both ends keeping the pair while either has room for
+//! it (at most [`DEGREE`] per node), neighbours tried lowest bound first.
 //!
-//! Bound of a partial path start → … → v with Σ ξ/ρ = R: its completion
-//! costs at least φ2 · (R + least Σ ξ/ρ from v to the goal over candidate
-//! edges). (A fractional knapsack of the time left over the candidate
-//! edges, by ξ/ρ per second, cut only a tenth more partial paths on those
-//! networks and doubled the cost of each, so it is not used.) Partial paths
-//! that cannot reach the goal within the budget
-//! (shortest time over the whole network) are cut as well.
+//! Bounds of a partial path start → … → v at time t with Σ ξ/ρ = R, both
+//! valid for every completion within the budget B:
+//! - risk: its cost is at least φ2 · (R + least Σ ξ/ρ from v to the goal
+//!   over candidate edges) (the idle term is at least 0);
+//! - risk and idle time: with μ = min(φ1, φ2 · least ξ/ρ per second of any
+//!   candidate edge), every second left is either idle (φ1 ≥ μ) or spent on
+//!   an edge whose risk costs at least μ per second, so the cost is at least
+//!   φ2 · R + μ · (B − t) + least Σ (φ2 · ξ/ρ − μ · time) from v to the
+//!   goal (weights ≥ 0 by the choice of μ).
+//!
+//! Rows run by the second bound's edge term, so a row stops at the first
+//! edge that reaches the best cost; the first bound cuts single edges. On
+//! the 12 untuned 40-node `bc40-pc` seeds the pair cut the expansions of a
+//! complete search at 8 candidates by 2.7× (sum of times) against the risk
+//! bound alone. (A fractional knapsack of the time left cut a tenth more
+//! partial paths than the risk bound and doubled the cost of each; a table
+//! of finished partial paths by node set and end, to cut those that another
+//! order of the same nodes dominates, cut almost none.) Partial paths that
+//! cannot reach the goal within the budget (shortest time over the whole
+//! network) are cut as well.
 
 use crate::capacity::nodes_of;
 use crate::instance::Objective;
@@ -51,8 +63,11 @@ struct Candidate {
     to: usize,
     time_s: f64,
     risk: f64,
-    /// `risk` plus the least Σ ξ/ρ from `to` to the goal: the order of a
-    /// row and the bound of taking the edge.
+    /// `risk` plus the least Σ ξ/ρ from `to` to the goal: the risk bound's
+    /// term for taking the edge.
+    risk_key: f64,
+    /// The edge's φ2 · ξ/ρ − μ · time plus the least such sum from `to` to
+    /// the goal: the order of a row and the idle bound's term.
     key: f64,
 }
 
@@ -66,6 +81,9 @@ pub struct RiskSearch<const W: usize> {
     degree: Vec<u8>,
     /// Least Σ ξ/ρ from each node to the goal over candidate edges.
     risk_to_goal: Vec<f64>,
+    /// Least Σ (φ2 · ξ/ρ − μ · time) from each node to the goal over
+    /// candidate edges.
+    priced_to_goal: Vec<f64>,
     /// Per depth of the path: its node, the next candidate to try there,
     /// and the path's time and Σ ξ/ρ up to that node.
     path: Vec<u16>,
@@ -75,8 +93,12 @@ pub struct RiskSearch<const W: usize> {
     /// Path length (0: the search is over).
     depth: usize,
     on_path: NodeSet<W>,
-    /// φ2 of the problem (the bound's price of risk).
+    /// φ2 of the problem (the bounds' price of risk).
     phi2: f64,
+    /// μ: the idle bound's price of a second of budget left.
+    idle_price: f64,
+    /// The budget B, s.
+    budget_s: f64,
     /// Cost of the best route the search found or was told of.
     best_cost: f64,
     found: Route<W>,
@@ -97,6 +119,7 @@ impl<const W: usize> RiskSearch<W> {
             rows: vec![[Candidate::default(); DEGREE]; n],
             degree: vec![0; n],
             risk_to_goal: vec![0.0; n],
+            priced_to_goal: vec![0.0; n],
             path: vec![0; n],
             next: vec![0; n],
             time_s: vec![0.0; n],
@@ -104,6 +127,8 @@ impl<const W: usize> RiskSearch<W> {
             depth: 0,
             on_path: NodeSet::EMPTY,
             phi2: 0.0,
+            idle_price: 0.0,
+            budget_s: 0.0,
             best_cost: f64::INFINITY,
             found: Route::new(),
         }
@@ -148,17 +173,43 @@ impl<const W: usize> RiskSearch<W> {
                 self.link(u, v);
             }
         }
-        self.risk_to_goal_table(p);
+        let mut least_rate = f64::INFINITY;
+        for u in 0..n {
+            for &v in &self.adjacency[u][..self.degree[u] as usize] {
+                let t = p.time_s(u, v as usize);
+                let rate = if t > 0.0 { p.risk_ratio(u, v as usize) / t } else { 0.0 };
+                least_rate = least_rate.min(rate);
+            }
+        }
+        let mu = if least_rate.is_finite() {
+            (phi2 * least_rate).min(phi1)
+        } else {
+            0.0
+        };
+        self.idle_price = mu;
+        self.budget_s = p.budget_s();
+        // Rounding may leave a weight a hair below 0; Dijkstra needs ≥ 0.
+        let priced = |u: usize, v: usize| (phi2 * p.risk_ratio(u, v) - mu * p.time_s(u, v)).max(0.0);
+        least_to_goal(
+            p,
+            &self.adjacency,
+            &self.degree,
+            |u, v| p.risk_ratio(u, v),
+            &mut self.risk_to_goal,
+        );
+        least_to_goal(p, &self.adjacency, &self.degree, priced, &mut self.priced_to_goal);
         for u in 0..n {
             let row = &mut self.adjacency[u][..self.degree[u] as usize];
-            let key = |v: u16| p.risk_ratio(u, v as usize) + self.risk_to_goal[v as usize];
+            let key = |v: u16| priced(u, v as usize) + self.priced_to_goal[v as usize];
             row.sort_unstable_by(|&a, &b| key(a).total_cmp(&key(b)));
             for (c, &v) in self.rows[u].iter_mut().zip(row.iter()) {
+                let (v, risk) = (v as usize, p.risk_ratio(u, v as usize));
                 *c = Candidate {
-                    to: v as usize,
-                    time_s: p.time_s(u, v as usize),
-                    risk: p.risk_ratio(u, v as usize),
-                    key: key(v),
+                    to: v,
+                    time_s: p.time_s(u, v),
+                    risk,
+                    risk_key: risk + self.risk_to_goal[v],
+                    key: key(v as u16),
                 };
             }
         }
@@ -182,35 +233,6 @@ impl<const W: usize> RiskSearch<W> {
         self.adjacency[v][dv] = u as u16;
         self.degree[u] += 1;
         self.degree[v] += 1;
-    }
-
-    /// Least Σ ξ/ρ to the goal over candidate edges (Dijkstra by linear
-    /// scans: n ≤ 512 and a start per solve).
-    fn risk_to_goal_table(&mut self, p: &Problem<W>) {
-        let n = p.n();
-        self.risk_to_goal[..n].fill(f64::INFINITY);
-        self.risk_to_goal[p.goal()] = 0.0;
-        let mut settled = NodeSet::<W>::EMPTY;
-        loop {
-            let mut u = usize::MAX;
-            let mut best = f64::INFINITY;
-            for (i, &d) in self.risk_to_goal[..n].iter().enumerate() {
-                if d < best && !settled.contains(i) {
-                    (u, best) = (i, d);
-                }
-            }
-            if u == usize::MAX {
-                return;
-            }
-            settled.insert(u);
-            for &v in &self.adjacency[u][..self.degree[u] as usize] {
-                let v = v as usize;
-                let d = best + p.risk_ratio(u, v);
-                if d < self.risk_to_goal[v] {
-                    self.risk_to_goal[v] = d;
-                }
-            }
-        }
     }
 
     /// Whether the search has looked at every candidate path.
@@ -238,14 +260,15 @@ impl<const W: usize> RiskSearch<W> {
             }
             self.next[level] += 1;
             let c = self.rows[u][i];
-            // The bound; rows run by it ascending, so once an edge reaches
-            // the best cost, so does every later one.
-            if self.phi2 * (self.risk[level] + c.key) >= self.best_cost {
+            // The idle bound; rows run by it ascending, so once an edge
+            // reaches the best cost, so does every later one.
+            let priced_so_far = self.phi2 * self.risk[level] + self.idle_price * (self.budget_s - self.time_s[level]);
+            if priced_so_far + c.key >= self.best_cost {
                 self.next[level] = DEGREE as u8;
                 continue;
             }
             let v = c.to;
-            if self.on_path.contains(v) {
+            if self.on_path.contains(v) || self.phi2 * (self.risk[level] + c.risk_key) >= self.best_cost {
                 continue;
             }
             left -= 1;
@@ -280,6 +303,42 @@ impl<const W: usize> RiskSearch<W> {
             self.depth += 1;
         }
         found.then_some(&self.found)
+    }
+}
+
+/// Least sum of `weight` (≥ 0) from each node to the goal over the
+/// candidate graph, into `out` (Dijkstra by linear scans: n ≤ 512 and one
+/// start per solve).
+fn least_to_goal<const W: usize>(
+    p: &Problem<W>,
+    adjacency: &[[u16; DEGREE]],
+    degree: &[u8],
+    weight: impl Fn(usize, usize) -> f64,
+    out: &mut [f64],
+) {
+    let n = p.n();
+    out[..n].fill(f64::INFINITY);
+    out[p.goal()] = 0.0;
+    let mut settled = NodeSet::<W>::EMPTY;
+    loop {
+        let mut u = usize::MAX;
+        let mut best = f64::INFINITY;
+        for (i, &d) in out[..n].iter().enumerate() {
+            if d < best && !settled.contains(i) {
+                (u, best) = (i, d);
+            }
+        }
+        if u == usize::MAX {
+            return;
+        }
+        settled.insert(u);
+        for &v in &adjacency[u][..degree[u] as usize] {
+            let v = v as usize;
+            let d = best + weight(u, v);
+            if d < out[v] {
+                out[v] = d;
+            }
+        }
     }
 }
 
