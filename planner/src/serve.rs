@@ -360,12 +360,13 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
 }
 
 /// Runs `planner serve`; the exit code follows the binaries' convention
-/// (0 done, 1 error, 2 bad arguments, 130 signal).
+/// (0 done, 1 error, 2 bad arguments or a scenario it cannot build, 130
+/// signal).
 pub fn run_serve(args: &ServeArgs) -> ExitCode {
     match serve(args) {
         Ok(ExitReason::Shutdown) => ExitCode::from(130),
         Ok(_) => ExitCode::SUCCESS,
-        Err(e @ ServeError::Usage(_)) => {
+        Err(e @ (ServeError::Usage(_) | ServeError::World(_))) => {
             eprintln!("planner: error: {e}");
             ExitCode::from(2)
         }

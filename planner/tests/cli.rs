@@ -444,16 +444,10 @@ fn the_generator_exports_networks_beyond_the_service_class_and_they_solve() {
     let (sol, _) = solve_json(&out_path, &["--algorithm", "pso", "--iterations", "10"]);
     assert_eq!(sol["feasible"], true, "{sol}");
     assert_figures_match(&doc, &sol);
-    // The real-time service carries up to 128 waypoints: a clear one-line refusal.
-    // (`serve` exits 1 for a world it cannot build, as for any scenario error.)
+    // The real-time service carries up to 128 waypoints: a clear one-line
+    // refusal, exit 2 like any other bad input.
     let out = planner(&["serve", "--scenario", path_str(&scenario), "--planner-seed", "1"]);
-    let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(
-        err.contains("`nodes` = 200") && err.contains("real-time service's capacity of 128"),
-        "{err}"
-    );
+    assert_input_error(&out, &["`nodes` = 200", "real-time service's capacity of 128"]);
     let out = planner(&[
         "montecarlo",
         "--scenario",
