@@ -29,6 +29,7 @@ family train bc40-pc 1 '{"nodes": 40, "objective": {"kind": "paper_cost", "phi1"
 family train bi60-mw-loose 1 "{\"nodes\": 60, \"chart\": $bay, \"time_available_s\": 45000}"
 family train bi60-pc-tight 1 "{\"nodes\": 60, \"chart\": $bay, \"time_available_s\": 15000, \"objective\": {\"kind\": \"paper_cost\", \"phi1\": 0.01, \"phi2\": 1}}"
 family train bc90-mw-tight-perturbed 1 '{"nodes": 90, "dynamic": 40, "sigma_m": 300, "bound_sigma_m": 600, "time_available_s": 15000}'
+family train bc64-pc 401 '{"nodes": 64, "objective": {"kind": "paper_cost", "phi1": 0.01, "phi2": 1}}'
 family train bi128-pc 1 "{\"nodes\": 128, \"chart\": $bay, \"objective\": {\"kind\": \"paper_cost\", \"phi1\": 0.001, \"phi2\": 1}}"
 # Held out: other seeds, sizes, budgets and weights, never tuned on.
 family heldout bc30-mw-loose 101 '{"nodes": 30, "time_available_s": 60000}'

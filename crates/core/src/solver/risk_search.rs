@@ -1,16 +1,18 @@
 //! A resumable depth-first branch-and-bound over the low-risk edges, for
-//! objectives that value time (`paper_cost`) on dense networks.
+//! objectives that value time (`paper_cost`).
 //!
-//! Why: under `paper_cost` a good route spends its budget to the second
-//! (every second idle costs φ1) on the tasks of lowest ξ/ρ. On dense
-//! networks the best routes use almost only edges among the few lowest-risk
-//! ones at one of their ends, and finding the combination whose times add
-//! up to the budget is a subset-sum-like search that ruin-and-recreate
-//! kicks rarely complete. Restricted to those candidate edges, a plain
+//! Why: under `paper_cost` a good route runs on the tasks of lowest ξ/ρ,
+//! and the best routes use almost only edges among the few lowest-risk
+//! ones at one of their ends. On dense networks they spend the budget to
+//! the second (every second idle costs φ1), and finding the combination
+//! whose times add up to the budget is a subset-sum-like search that
+//! ruin-and-recreate kicks rarely complete; on sparse networks with a
+//! small φ1 the best route is a short low-risk path that shares few nodes
+//! with the kicks' routes. Restricted to those candidate edges, a plain
 //! depth-first search with bounds on risk and idle time finds the routes
 //! the kicks miss; over each node's 8 lowest-risk edges it finishes in
-//! 0.05–0.4 million expansions on 40-node networks and 1–4 million on
-//! 64-node ones (about 30 ns each).
+//! 0.05–0.4 million expansions on dense 40-node networks and 1–4 million
+//! on dense 64-node ones (about 30 ns each).
 //!
 //! Contract: [`RiskSearch::start`] builds the candidate graph of a problem
 //! and the bound's tables (no allocation: every buffer is sized for the
