@@ -675,10 +675,10 @@ mod tests {
         use crate::solver::risk_search::RiskSearch;
         // Dense networks, and sparse ones with a small φ1, where the best
         // route is a short low-risk path.
-        let shapes = [(24, 0.95, 31_000.0, 0.01), (40, 0.3, 31_000.0, 0.001)];
+        let shapes = [(24, 0.95, 0.01), (40, 0.3, 0.001)];
         let mut found = 0;
-        for (seed, (n, density, budget, phi1)) in (0..8).zip(shapes.into_iter().cycle()) {
-            let mut inst = random_instance(n, density, budget, seed);
+        for (seed, (n, density, phi1)) in (0..8).zip(shapes.into_iter().cycle()) {
+            let mut inst = random_instance(n, density, 31_000.0, seed);
             inst.objective = Objective::PaperCost { phi1, phi2: 1.0 };
             let p = Problem::from_instance(&inst).unwrap();
             let mut alone = RiskSearch::new();
