@@ -20,6 +20,7 @@
 
 pub mod auto;
 pub mod bbo;
+pub mod beam;
 pub mod exact;
 pub mod ils;
 mod lanes;
