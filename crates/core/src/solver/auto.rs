@@ -264,6 +264,7 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     first_polish: bool,
     /// Whether the recreate step shortens ([`AutoSettings::dense_cost_shorten`]).
     shorten: bool,
+    /// The forward beam search (`max_weight` on sparse networks).
     beam: Beam<W>,
     /// Width of the present beam search; 0 when this problem runs none
     /// ([`AutoSettings::beam_width`]).
@@ -302,7 +303,7 @@ impl<const W: usize> Auto<W> {
             defer_deep: false,
             shorten: true,
             beam: Beam::new(),
-            beam_width: 16,
+            beam_width: 0,
         }
     }
 
@@ -652,13 +653,12 @@ impl<const W: usize> Auto<W> {
         if self.beam.is_done() {
             return;
         }
-        let Some(route) = self.beam.step(problem).copied() else {
+        let Some(mut route) = self.beam.step(problem).copied() else {
             return;
         };
         let Some(mut e) = problem.evaluate(&route) else {
             return;
         };
-        let mut route = route;
         self.ls
             .improve_deep(problem, &mut route, &mut e, self.settings.polish_passes);
         if e.feasible {
