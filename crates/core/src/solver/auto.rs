@@ -266,9 +266,8 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     shorten: bool,
     /// The forward beam search (`max_weight` on sparse networks).
     beam: Beam<W>,
-    /// Width of the present beam search; 0 when this problem runs none
-    /// ([`AutoSettings::beam_width`]).
-    beam_width: usize,
+    /// Whether this problem runs the beam ([`AutoSettings::beam_width`]).
+    beaming: bool,
 }
 
 impl<const W: usize> Auto<W> {
@@ -303,7 +302,7 @@ impl<const W: usize> Auto<W> {
             defer_deep: false,
             shorten: true,
             beam: Beam::new(),
-            beam_width: 0,
+            beaming: false,
         }
     }
 
@@ -572,13 +571,9 @@ impl<const W: usize> Solver<W> for Auto<W> {
         if self.risk_searching {
             self.risk.start(problem, RISK_CANDIDATES);
         }
-        self.beam_width = if sparse && !values_time {
-            self.settings.beam_width
-        } else {
-            0
-        };
-        if self.beam_width > 0 {
-            self.beam.start(problem, self.beam_width);
+        self.beaming = self.settings.beam_width > 0 && sparse && !values_time;
+        if self.beaming {
+            self.beam.start(problem, self.settings.beam_width);
         }
     }
 
@@ -599,7 +594,7 @@ impl<const W: usize> Solver<W> for Auto<W> {
         if self.risk_searching {
             self.risk_search_step(problem);
         }
-        if self.beam_width > 0 {
+        if self.beaming {
             self.beam_step(problem);
         }
         if self.best_eval.feasible {

@@ -179,12 +179,9 @@ impl<const W: usize> Beam<W> {
     /// has ended (and `None` before and after).
     pub fn step(&mut self, p: &Problem<W>) -> Option<&Route<W>> {
         if self.done {
-            if self.handed || self.best.is_empty() {
-                self.handed = true;
-                return None;
-            }
+            let first = !self.handed;
             self.handed = true;
-            return Some(&self.best);
+            return (first && !self.best.is_empty()).then_some(&self.best);
         }
         let limit = p.budget_limit_s();
         let goal = p.goal();
