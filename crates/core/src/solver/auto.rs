@@ -44,13 +44,14 @@
 //! Its routes are offered like a kick's, polished on the whole network,
 //! and the iterated local search continues from them.
 //!
-//! Under `max_weight` on sparse networks, the first steps also run a
-//! forward beam search ([`Beam`], a level per step): there the best route
-//! often runs through a region the current route does not touch, or
-//! through a cluster the other way round, which kicks that remove a third
-//! of the route at most and refill one node at a time do not reach. Its
-//! best route, polished, becomes the current route of the iterated local
-//! search.
+//! Under `max_weight` on sparse networks, the steps also run forward beam
+//! searches ([`Beam`], a level per step, one beam after another): there
+//! the best route often runs through a region the current route does not
+//! touch, or through a cluster the other way round, which kicks that
+//! remove a third of the route at most and refill one node at a time do
+//! not reach. Each beam prices time differently, so the beams end in
+//! different regions; each one's best route, polished, becomes the current
+//! route of the iterated local search.
 //!
 //! Kicks are polished with the cheap moves ([`LocalSearch::improve`]);
 //! every new best route also gets the deep polish (or-opt, swap, pair
@@ -179,15 +180,23 @@ pub struct AutoSettings {
     /// 20 to 100 ms, and with the search they reach it within 20 ms.
     pub risk_search: u32,
     /// `max_weight` on sparse networks (edge density at most
-    /// [`REROUTE_MAX_DENSITY`]): run a forward beam search ([`Beam`]) of
-    /// this width once, a level per step, and continue the iterated local
-    /// search from its route, polished (0: never; at most
-    /// [`super::beam::MAX_WIDTH`]). 16, decided on the training family
-    /// `bi60-mw-loose` (12 instances, 3 seeds, mean gap at 20 / 100 ms):
-    /// none 1.67 / 1.29 %, width 8 then widening 1.37 / 0.39 %, 16 once
-    /// 0.69 / 0.17 %, 16 then widening to 64 1.13 / 0.24 %, 32 once
-    /// 0.77 / 0.19 %.
+    /// [`REROUTE_MAX_DENSITY`]): partial paths each forward beam search
+    /// ([`Beam`]) keeps per level (0: no beams; at most
+    /// [`super::beam::MAX_WIDTH`]). Decided on the training families
+    /// `bi60-mw-loose` and `bi90-mw` (20 instances, 3 seeds, mean / worst
+    /// gap at 20 ms): 8: 0.79 / 7.7 %, 16: 0.48 / 2.9 %, 32: 0.56 / 7.7 %.
     pub beam_width: usize,
+    /// Beams run one after the other, a level per step, each continuing
+    /// the iterated local search from its route. Training families, 6
+    /// seeds, mean gap at 20 / 100 ms: one 1.13 / 0.68 % (3 seeds), 5
+    /// 0.88 / 0.33 %, 8 0.64 / 0.22 %, 12 0.57 / 0.25 %.
+    pub beam_rounds: usize,
+    /// The price of a second of time left in beam `k`'s ranking is factor
+    /// `k mod 5` times the best route's weight per second of the budget
+    /// when the beam starts. Different prices end in different regions of
+    /// the network: a single factor 0.7 for every round gave 1.01 / 0.59 %,
+    /// 0.6 and 0.8 in turn 0.64 / 0.27 %, these five 0.64 / 0.22 %.
+    pub beam_price_factors: [f64; 5],
 }
 
 impl Default for AutoSettings {
@@ -214,6 +223,8 @@ impl Default for AutoSettings {
             dense_cost_shorten: false,
             risk_search: 16_384,
             beam_width: 16,
+            beam_rounds: 8,
+            beam_price_factors: [0.7, 0.6, 0.8, 0.5, 0.9],
         }
     }
 }
@@ -268,6 +279,8 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     beam: Beam<W>,
     /// Whether this problem runs the beam ([`AutoSettings::beam_width`]).
     beaming: bool,
+    /// Beams started on this problem.
+    beams_started: usize,
 }
 
 impl<const W: usize> Auto<W> {
@@ -303,6 +316,7 @@ impl<const W: usize> Auto<W> {
             shorten: true,
             beam: Beam::new(),
             beaming: false,
+            beams_started: 0,
         }
     }
 
@@ -571,10 +585,8 @@ impl<const W: usize> Solver<W> for Auto<W> {
         if self.risk_searching {
             self.risk.start(problem, RISK_CANDIDATES);
         }
-        self.beaming = self.settings.beam_width > 0 && sparse && !values_time;
-        if self.beaming {
-            self.beam.start(problem, self.settings.beam_width);
-        }
+        self.beaming = self.settings.beam_width > 0 && self.settings.beam_rounds > 0 && sparse && !values_time;
+        self.beams_started = 0;
     }
 
     fn step(&mut self, problem: &Problem<W>, rng: &mut PlannerRng) -> bool {
@@ -586,6 +598,9 @@ impl<const W: usize> Solver<W> for Auto<W> {
             if problem.better(&self.best_eval, &self.cur_eval) {
                 self.cur = self.best;
                 self.cur_eval = self.best_eval;
+            }
+            if self.beaming {
+                self.start_beam(problem);
             }
         }
         if self.settings.swarm_every > 0 && self.steps.is_multiple_of(self.settings.swarm_every) {
@@ -641,11 +656,28 @@ impl<const W: usize> Auto<W> {
         }
     }
 
-    /// One level of the beam search; once it ends, its route, polished,
+    /// Starts the next beam, its time priced from the best route so far.
+    fn start_beam(&mut self, problem: &Problem<W>) {
+        let factors = &self.settings.beam_price_factors;
+        let factor = factors[self.beams_started % factors.len()];
+        let weight = if self.best_eval.feasible {
+            self.best_eval.weight
+        } else {
+            0.0
+        };
+        let price = factor * weight / problem.budget_limit_s();
+        self.beam.start(problem, self.settings.beam_width, price);
+        self.beams_started += 1;
+    }
+
+    /// One level of the beam search; once a beam ends, its route, polished,
     /// becomes the iterated local search's current route (a new basin,
-    /// worse or not) and is offered as a best.
+    /// worse or not), is offered as a best, and the next beam starts.
     fn beam_step(&mut self, problem: &Problem<W>) {
         if self.beam.is_done() {
+            if self.beams_started < self.settings.beam_rounds {
+                self.start_beam(problem);
+            }
             return;
         }
         let Some(mut route) = self.beam.step(problem).copied() else {
