@@ -1,4 +1,5 @@
-//! A resumable forward beam search over simple paths, for `max_weight`.
+//! A resumable forward beam search over simple paths, for `max_weight` on
+//! sparse networks.
 //!
 //! Why: on sparse networks (Bay of Islands charts, 30–45 % of node pairs
 //! are edges) the best route often runs through a region the current route
