@@ -44,14 +44,15 @@
 //! Its routes are offered like a kick's, polished on the whole network,
 //! and the iterated local search continues from them.
 //!
-//! Under `max_weight` on sparse networks, the steps also run forward beam
-//! searches ([`Beam`], a level per step, one beam after another): there
-//! the best route often runs through a region the current route does not
-//! touch, or through a cluster the other way round, which kicks that
-//! remove a third of the route at most and refill one node at a time do
-//! not reach. Each beam prices time differently, so the beams end in
-//! different regions; each one's best route, polished, becomes the current
-//! route of the iterated local search.
+//! Under `max_weight`, the steps also run forward beam searches ([`Beam`],
+//! a level per step, one beam after another): on sparse networks the best
+//! route often runs through a region the current route does not touch, or
+//! through a cluster the other way round, which kicks that remove a third
+//! of the route at most and refill one node at a time do not reach; on
+//! dense ones a beam's route is a different basin too. Each beam prices
+//! time differently, so the beams end in different regions; each one's
+//! best route, polished, becomes the current route of the iterated local
+//! search.
 //!
 //! Kicks are polished with the cheap moves ([`LocalSearch::improve`]);
 //! every new best route also gets the deep polish (or-opt, swap, pair
@@ -181,11 +182,17 @@ pub struct AutoSettings {
     pub risk_search: u32,
     /// `max_weight` on sparse networks (edge density at most
     /// [`REROUTE_MAX_DENSITY`]): partial paths each forward beam search
-    /// ([`Beam`]) keeps per level (0: no beams; at most
+    /// ([`Beam`]) keeps per level (0: no beams there; at most
     /// [`super::beam::MAX_WIDTH`]). Decided on the training families
     /// `bi60-mw-loose` and `bi90-mw` (20 instances, 3 seeds, mean / worst
     /// gap at 20 ms): 8: 0.79 / 7.7 %, 16: 0.48 / 2.9 %, 32: 0.56 / 7.7 %.
     pub beam_width: usize,
+    /// The same on dense networks, where a level has a candidate for
+    /// nearly every node; solves without a warm start only. Training
+    /// families `bc40-mw` and `bc90-mw-tight-perturbed` (8 instances, 8
+    /// seeds, mean gap at 20 / 100 ms): no beams 1.13 / 0.70 %, width 8
+    /// 0.61 / 0.41 %, 16 0.87 / 0.49 %.
+    pub dense_beam_width: usize,
     /// Beams run one after the other, a level per step, each continuing
     /// the iterated local search from its route. Training families, 6
     /// seeds, mean gap at 20 / 100 ms: one 1.13 / 0.68 % (3 seeds), 5
@@ -223,6 +230,7 @@ impl Default for AutoSettings {
             dense_cost_shorten: false,
             risk_search: 16_384,
             beam_width: 16,
+            dense_beam_width: 8,
             beam_rounds: 8,
             beam_price_factors: [0.7, 0.6, 0.8, 0.5, 0.9],
         }
@@ -275,8 +283,10 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     first_polish: bool,
     /// Whether the recreate step shortens ([`AutoSettings::dense_cost_shorten`]).
     shorten: bool,
-    /// The forward beam search (`max_weight` on sparse networks).
+    /// The forward beam search (`max_weight`).
     beam: Beam<W>,
+    /// Its width on this problem (sparse or dense).
+    beam_width: usize,
     /// Whether this problem runs the beam ([`AutoSettings::beam_width`]).
     beaming: bool,
     /// Beams started on this problem.
@@ -315,6 +325,7 @@ impl<const W: usize> Auto<W> {
             defer_deep: false,
             shorten: true,
             beam: Beam::new(),
+            beam_width: 0,
             beaming: false,
             beams_started: 0,
         }
@@ -585,7 +596,16 @@ impl<const W: usize> Solver<W> for Auto<W> {
         if self.risk_searching {
             self.risk.start(problem, RISK_CANDIDATES);
         }
-        self.beaming = self.settings.beam_width > 0 && self.settings.beam_rounds > 0 && sparse && !values_time;
+        self.beam_width = if sparse {
+            self.settings.beam_width
+        } else {
+            self.settings.dense_beam_width
+        };
+        // On dense networks a warm start (a re-plan from the previous plan)
+        // runs no beams: each hand-over replaced the warm route, and the
+        // default mission's warm-started re-plans of 150 steps lost weight.
+        let cold_or_sparse = sparse || warm.is_none();
+        self.beaming = self.beam_width > 0 && self.settings.beam_rounds > 0 && !values_time && cold_or_sparse;
         self.beams_started = 0;
     }
 
@@ -666,7 +686,7 @@ impl<const W: usize> Auto<W> {
             0.0
         };
         let price = factor * weight / problem.budget_limit_s();
-        self.beam.start(problem, self.settings.beam_width, price);
+        self.beam.start(problem, self.beam_width, price);
         self.beams_started += 1;
     }
 
@@ -833,5 +853,30 @@ mod tests {
         }
         // Dense paper_cost: the setting is live there.
         assert!(differed > 0);
+    }
+
+    #[test]
+    fn beams_run_under_max_weight_except_in_dense_warm_started_solves() {
+        use crate::instance::Objective;
+        let mut rng = PlannerRng::new(1);
+        let mut s = Auto::default();
+        for seed in 0..3 {
+            let dense = random_instance(30, 0.95, 31_000.0, seed);
+            let sparse = random_instance(30, 0.4, 31_000.0, seed);
+            for (inst, is_dense) in [(dense, true), (sparse, false)] {
+                let p = Problem::from_instance(&inst).unwrap();
+                run(&mut s, &p, &mut rng, None, Budget::iterations(5));
+                let warm = *s.best().0;
+                s.start(&p, &mut rng, None);
+                assert!(s.beaming, "seed {seed}, cold");
+                s.start(&p, &mut rng, Some(&warm));
+                assert_eq!(s.beaming, !is_dense, "seed {seed}, warm");
+                let mut cost = inst;
+                cost.objective = Objective::PaperCost { phi1: 0.01, phi2: 1.0 };
+                let p = Problem::from_instance(&cost).unwrap();
+                s.start(&p, &mut rng, None);
+                assert!(!s.beaming, "seed {seed}: paper_cost values time");
+            }
+        }
     }
 }

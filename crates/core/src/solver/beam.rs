@@ -1,5 +1,4 @@
-//! A resumable forward beam search over simple paths, for `max_weight` on
-//! sparse networks.
+//! A resumable forward beam search over simple paths, for `max_weight`.
 //!
 //! Why: on sparse networks (Bay of Islands charts, 30–45 % of node pairs
 //! are edges) the best route often runs through a region the current route
