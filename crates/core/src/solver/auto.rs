@@ -287,7 +287,8 @@ pub struct Auto<const W: usize = DEFAULT_WORDS> {
     beam: Beam<W>,
     /// Its width on this problem (sparse or dense).
     beam_width: usize,
-    /// Whether this problem runs the beam ([`AutoSettings::beam_width`]).
+    /// Whether this solve runs beams (`max_weight`; on dense networks only
+    /// without a warm start).
     beaming: bool,
     /// Beams started on this problem.
     beams_started: usize,

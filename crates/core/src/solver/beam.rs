@@ -51,7 +51,7 @@ struct Entry<const W: usize> {
 }
 
 /// An extension of a level's entry, before selection.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 struct Candidate {
     parent: u16,
     node: u16,
