@@ -134,8 +134,9 @@ struct Vehicle {
 }
 
 impl Vehicle {
-    /// Drains every inbox: snapshots first, then plans, then status; then
-    /// plans again when a status came in. A plan answering a trigger is sent
+    /// Drains every inbox: snapshots first, then plans (catching up on
+    /// snapshots when a plan names a newer one), then status; then plans
+    /// again when a status came in. A plan answering a trigger is sent
     /// before the status that says so, so a plan published between the two
     /// drains is queued by the time its status is seen: taking it before
     /// moving on keeps lockstep runs deterministic.
@@ -158,19 +159,33 @@ impl Vehicle {
     }
 
     /// Offers every plan that arrived to the simulation, journaling those taken.
+    ///
+    /// A plan computed on a snapshot this vehicle has not drained yet is
+    /// checked against that snapshot, not the one before: the sensor sent it
+    /// before the planner could read it, so it is queued here; draining it
+    /// first keeps an edge the new snapshot added from looking like a bad
+    /// plan (and lockstep runs from depending on when each queue is read).
     fn drain_plans(&mut self) -> Result<(), Error> {
         let sim = &mut self.sim;
+        let snapshots = &mut self.ports.snapshots;
+        let mut catch_up = Ok(0);
         let mut rejected = Vec::new();
         let mut accepted = Vec::new();
-        self.ports.plans.drain(&mut |p| match sim.offer_plan(p) {
-            Err(kind) => rejected.push((kind, p.header.fingerprint)),
-            Ok(PlanOffer::Stale) => {}
-            Ok(PlanOffer::Taken) => accepted.push(JournalEvent::Plan {
-                t: sim.time(),
-                seq: p.header.seq,
-                route: sim.plan().iter().map(|&b| b as usize).collect(),
-            }),
+        self.ports.plans.drain(&mut |p| {
+            if p.snapshot_epoch > sim.epoch() && catch_up.is_ok() {
+                catch_up = snapshots.drain(&mut |s| sim.apply_snapshot(s));
+            }
+            match sim.offer_plan(p) {
+                Err(kind) => rejected.push((kind, p.header.fingerprint)),
+                Ok(PlanOffer::Stale) => {}
+                Ok(PlanOffer::Taken) => accepted.push(JournalEvent::Plan {
+                    t: sim.time(),
+                    seq: p.header.seq,
+                    route: sim.plan().iter().map(|&b| b as usize).collect(),
+                }),
+            }
         })?;
+        catch_up?;
         for (kind, fp) in rejected {
             self.ports.plans.reject_later(kind, fp);
         }
@@ -501,5 +516,61 @@ fn main() -> ExitCode {
             eprintln!("vehicle-sim: error: {e}");
             ExitCode::from(1)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use auv_core::fixtures::line_instance;
+    use auv_messages::network::write_snapshot;
+    use auv_transport::{IpcOptions, WaitMode, unique_prefix};
+
+    #[test]
+    fn a_plan_on_a_snapshot_still_queued_is_checked_against_that_snapshot() {
+        let opts = IpcOptions::new(Some(&unique_prefix("vq")), "auv1", WaitMode::Event).unwrap();
+        let ctx = IpcContext::<S>::new(&opts, "test-vehicle").unwrap();
+        let fp = 9;
+        let mut v = Vehicle {
+            sim: VehicleSim::new(),
+            ports: Ports {
+                waker: ctx.waker(Role::Vehicle).unwrap(),
+                state: FaultyOutbox::new(
+                    ctx.outbox::<VehicleState>(Stamp::new(fp)).unwrap(),
+                    FaultCycle::NONE,
+                    BadState { n: 4 },
+                ),
+                snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>().unwrap(), fp, "vehicle-sim"),
+                plans: Guarded::new(ctx.inbox::<Plan>().unwrap(), fp, "vehicle-sim"),
+                status: Guarded::new(ctx.inbox::<PlannerStatus>().unwrap(), fp, "vehicle-sim"),
+            },
+            answered: Answered::default(),
+            time_scale: 0.0,
+            journal: None,
+            holding: false,
+        };
+        let mut sensor = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();
+        let mut planner = ctx.outbox::<Plan>(Stamp::new(fp)).unwrap();
+        // Epoch 0 lacks the edge 1 - 2; epoch 1 has it.
+        let full = line_instance();
+        let mut cut = full.clone();
+        cut.edges.retain(|e| (e.a, e.b) != (1, 2));
+        sensor.publish(&mut |m| write_snapshot(&cut, 0, m).unwrap()).unwrap();
+        v.drain().unwrap();
+        assert_eq!(v.sim.epoch(), 0);
+        // The sensor's next update and a plan computed on it arrive after
+        // the vehicle drained its snapshots: only plans are drained next.
+        sensor.publish(&mut |m| write_snapshot(&full, 1, m).unwrap()).unwrap();
+        planner
+            .publish(&mut |m: &mut Plan| {
+                m.snapshot_epoch = 1;
+                m.route_len = 4;
+                m.route[..4].copy_from_slice(&[0, 1, 2, 3]);
+            })
+            .unwrap();
+        v.drain_plans().unwrap();
+        assert_eq!(v.sim.epoch(), 1);
+        assert_eq!(v.sim.plan(), &[0, 1, 2, 3]);
+        assert_eq!(v.rejected().total(), 0, "{}", v.rejected());
     }
 }

@@ -298,10 +298,13 @@ class Vehicle:
     def rejected(self):
         return [a + b + c for a, b, c in zip(self.g_snap.rejected, self.g_plan.rejected, self.g_status.rejected)]
 
-    def drain(self):
+    def drain_snapshots(self):
         for s in self.snapshots.drain():
             if self.g_snap.check(s) is None:
                 self.sim.apply_snapshot(s)
+
+    def drain(self):
+        self.drain_snapshots()
         if self.g_snap.fingerprint is None:
             return  # the scenario is known from the first snapshot on
         if self.stamp is None:
@@ -323,6 +326,10 @@ class Vehicle:
         for p in self.plans.drain():
             if self.g_plan.check(p) is not None:
                 continue
+            if p.snapshot_epoch > self.sim.net.epoch:
+                # Planned on a snapshot still queued here (the sensor sent it
+                # before the planner read it): check the plan against it.
+                self.drain_snapshots()
             verdict = self.sim.offer_plan(p)
             if verdict == "taken":
                 self.journal.write(event="plan", t=self.sim.t, seq=p.header.seq, route=list(self.sim.plan))
