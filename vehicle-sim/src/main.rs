@@ -133,7 +133,37 @@ struct Vehicle {
     holding: bool,
 }
 
+impl Ports {
+    /// The vehicle's ports in `ctx`: states carry `stamp` (with `faults`
+    /// injected, node ids below `n`), inputs are accepted from `stamp`'s
+    /// scenario. Snapshots are checked against the scenario only; `main`
+    /// adds the world's check.
+    fn open(ctx: &IpcContext<S>, stamp: Stamp, faults: FaultCycle, n: usize) -> Result<Self, Error> {
+        let fingerprint = stamp.fingerprint;
+        Ok(Self {
+            waker: ctx.waker(Role::Vehicle)?,
+            state: FaultyOutbox::new(ctx.outbox::<VehicleState>(stamp)?, faults, BadState { n }),
+            snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "vehicle-sim"),
+            plans: Guarded::new(ctx.inbox::<Plan>()?, fingerprint, "vehicle-sim"),
+            status: Guarded::new(ctx.inbox::<PlannerStatus>()?, fingerprint, "vehicle-sim"),
+        })
+    }
+}
+
 impl Vehicle {
+    /// A vehicle without a network yet (it starts with the first snapshot);
+    /// `time_scale` 0 is lockstep.
+    fn new(ports: Ports, time_scale: f64, journal: Option<Journal>) -> Self {
+        Self {
+            sim: VehicleSim::new(),
+            ports,
+            answered: Answered::default(),
+            time_scale,
+            journal,
+            holding: false,
+        }
+    }
+
     /// Drains every inbox: snapshots first, then plans (catching up on
     /// snapshots when a plan names a newer one), then status; then plans
     /// again when a status came in. A plan answering a trigger is sent
@@ -414,14 +444,8 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     let opts = args.ipc.options()?;
     let ctx = IpcContext::<S>::new(&opts, "vehicle-sim")?;
     let stamp = Stamp::new(fingerprint);
-    let ports = Ports {
-        waker: ctx.waker(Role::Vehicle)?,
-        state: FaultyOutbox::new(ctx.outbox::<VehicleState>(stamp)?, faults, BadState { n: rules.n() }),
-        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "vehicle-sim")
-            .with_check(rules.snapshot_check()),
-        plans: Guarded::new(ctx.inbox::<Plan>()?, fingerprint, "vehicle-sim"),
-        status: Guarded::new(ctx.inbox::<PlannerStatus>()?, fingerprint, "vehicle-sim"),
-    };
+    let mut ports = Ports::open(&ctx, stamp, faults, rules.n())?;
+    ports.snapshots = ports.snapshots.with_check(rules.snapshot_check());
     let earlier = match &args.journal {
         Some(p) => JournalSummary::read(p)?,
         None => JournalSummary::default(),
@@ -433,14 +457,8 @@ fn run(args: &Args) -> Result<Outcome, Error> {
     }
     let resume: Option<Resume> = earlier.resume();
     let journal = args.journal.as_deref().map(Journal::open).transpose()?;
-    let mut v = Vehicle {
-        sim: VehicleSim::new(),
-        ports,
-        answered: Answered::default(),
-        time_scale: if args.lockstep { 0.0 } else { args.time_scale },
-        journal,
-        holding: false,
-    };
+    let time_scale = if args.lockstep { 0.0 } else { args.time_scale };
+    let mut v = Vehicle::new(ports, time_scale, journal);
     // The mission clock starts with the first snapshot.
     let timeout = args.answer_timeout_s;
     if !v.wait_for(timeout, "the first waypoint snapshot", &|v| v.sim.has_network())? {
@@ -531,24 +549,8 @@ mod tests {
         let opts = IpcOptions::new(Some(&unique_prefix("vq")), "auv1", WaitMode::Event).unwrap();
         let ctx = IpcContext::<S>::new(&opts, "test-vehicle").unwrap();
         let fp = 9;
-        let mut v = Vehicle {
-            sim: VehicleSim::new(),
-            ports: Ports {
-                waker: ctx.waker(Role::Vehicle).unwrap(),
-                state: FaultyOutbox::new(
-                    ctx.outbox::<VehicleState>(Stamp::new(fp)).unwrap(),
-                    FaultCycle::NONE,
-                    BadState { n: 4 },
-                ),
-                snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>().unwrap(), fp, "vehicle-sim"),
-                plans: Guarded::new(ctx.inbox::<Plan>().unwrap(), fp, "vehicle-sim"),
-                status: Guarded::new(ctx.inbox::<PlannerStatus>().unwrap(), fp, "vehicle-sim"),
-            },
-            answered: Answered::default(),
-            time_scale: 0.0,
-            journal: None,
-            holding: false,
-        };
+        let ports = Ports::open(&ctx, Stamp::new(fp), FaultCycle::NONE, 4).unwrap();
+        let mut v = Vehicle::new(ports, 0.0, None);
         let mut sensor = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();
         let mut planner = ctx.outbox::<Plan>(Stamp::new(fp)).unwrap();
         // Epoch 0 lacks the edge 1 - 2; epoch 1 has it.
