@@ -108,22 +108,27 @@ impl<const W: usize> Moves<W> {
             // improving reversal met in the sweep is applied at once.
             for i in 1..len.saturating_sub(2) {
                 let a = route.get(i - 1);
-                let mut j = i + 1;
-                while j < len - 1 {
-                    let (ui, uj, b) = (route.get(i), route.get(j), route.get(j + 1));
+                let row_a = p.time_row(a);
+                // The first node of the reversal, its row and the time of
+                // the edge into it change only when a reversal is applied.
+                let mut ui = route.get(i);
+                let (mut row_ui, mut t_aui) = (p.time_row(ui), row_a[ui]);
+                for j in i + 1..len - 1 {
+                    let (uj, b) = (usize::from(route.ids()[j]), usize::from(route.ids()[j + 1]));
                     // `accept` never takes a move that lengthens the route,
                     // so the time table alone rules most reversals out
                     // before the larger edge records are read.
-                    let dt = p.time_s(a, uj) + p.time_s(ui, b) - p.time_s(a, ui) - p.time_s(uj, b);
+                    let dt = row_a[uj] + row_ui[b] - t_aui - p.time_s(uj, b);
                     if dt <= EPS && p.has_edge(a, uj) && p.has_edge(ui, b) {
                         let dw = ew(a, uj) + ew(ui, b) - ew(a, ui) - ew(uj, b);
                         let dr = p.risk_ratio(a, uj) + p.risk_ratio(ui, b) - p.risk_ratio(a, ui) - p.risk_ratio(uj, b);
                         if accept(dt, v.static_delta(dw, dr)) {
                             route.reverse(i, j);
                             improved = true;
+                            ui = uj;
+                            (row_ui, t_aui) = (p.time_row(ui), row_a[ui]);
                         }
                     }
-                    j += 1;
                 }
             }
             if !improved {
@@ -205,9 +210,15 @@ impl<const W: usize> Moves<W> {
         limit: f64,
     ) -> (f64, u16, f64) {
         let nu = p.neighbours(u);
+        let row_u = p.time_row(u);
         let mut best = (f64::NEG_INFINITY, 0u16, 0.0);
-        for k in 0..route.len() - 1 {
-            let (a, b) = (route.get(k), route.get(k + 1));
+        for pair in route.ids().windows(2) {
+            let (a, b) = (usize::from(pair[0]), usize::from(pair[1]));
+            // Most places do not fit: their time, read from u's own row
+            // (edge times are symmetric), rules them out first.
+            if time_s + (row_u[a] + row_u[b] - p.time_s(a, b)) > limit {
+                continue;
+            }
             if let Some((r, dt)) = Self::insertion(p, v, nu, u, (a, b), noise, time_s, limit)
                 && r > best.0
             {
@@ -232,11 +243,9 @@ impl<const W: usize> Moves<W> {
         time_s: f64,
         limit: f64,
     ) -> Option<(f64, f64)> {
-        if !(nu.contains(a) && nu.contains(b)) {
-            return None;
-        }
+        // The time first: a missing edge's +∞ fails it as well.
         let dt = p.time_s(a, u) + p.time_s(u, b) - p.time_s(a, b);
-        if time_s + dt > limit {
+        if time_s + dt > limit || !(nu.contains(a) && nu.contains(b)) {
             return None;
         }
         let dw = p.gain(a, u) + p.gain(u, b) - p.gain(a, b);

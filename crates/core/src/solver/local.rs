@@ -29,13 +29,15 @@
 //! bounded: one pass is O(len · n) for insert/replace, O(len · deg²) for pair
 //! insertion and O(len²) for 2-opt, or-opt and swap.
 
-use crate::capacity::DEFAULT_WORDS;
+use crate::capacity::{DEFAULT_WORDS, PerNode};
 use crate::problem::{NodeSet, Problem};
 use crate::route::{Route, RouteEval};
 
 /// Reusable scratch for local search (no heap).
 pub struct LocalSearch<const W: usize = DEFAULT_WORDS> {
     scratch: Route<W>,
+    /// Time of the route's edge `k → k + 1`, per `k`, while a pass scans.
+    legs: PerNode<f64, W>,
 }
 
 impl<const W: usize> Default for LocalSearch<W> {
@@ -71,7 +73,10 @@ const MAX_SEGMENT: usize = 3;
 impl<const W: usize> LocalSearch<W> {
     /// Scratch ready for use.
     pub const fn new() -> Self {
-        Self { scratch: Route::new() }
+        Self {
+            scratch: Route::new(),
+            legs: PerNode::splat(0.0),
+        }
     }
 
     /// Improves `route` (whose figures are `eval`) in place; returns whether
@@ -149,6 +154,10 @@ impl<const W: usize> LocalSearch<W> {
         let limit = p.budget_limit_s();
         let free = p.free_nodes(route);
         let mut best: Option<(Move, RouteEval)> = None;
+        for (leg, pair) in self.legs.iter_mut().zip(route.ids().windows(2)) {
+            *leg = p.time_s(usize::from(pair[0]), usize::from(pair[1]));
+        }
+        let legs = &self.legs;
         let consider = |best: &mut Option<(Move, RouteEval)>, mv: Move, e: RouteEval| {
             let incumbent = best.as_ref().map_or(eval, |(_, b)| b);
             if p.better(&e, incumbent) {
@@ -159,6 +168,16 @@ impl<const W: usize> LocalSearch<W> {
         // every feasible route first), so the time change alone rules most
         // candidates out on a route that uses its budget.
         let fits = |dt: f64| !eval.feasible || eval.time_s + dt <= limit;
+        // A superset of the nodes v for which a detour a → v → b in place of
+        // `out_t` s of the route `fits`: the margin covers the rounding of
+        // the two ways of summing, so `fits` alone still decides.
+        let may_fit = |a: usize, b: usize, out_t: f64| {
+            if !eval.feasible {
+                return NodeSet::FULL;
+            }
+            let room = limit - eval.time_s + out_t;
+            p.detours_within(a, b, room + 1e-9 * (limit.abs() + eval.time_s.abs() + out_t.abs()))
+        };
         let with = |e: &RouteEval, dt: f64, dd: f64, dw: f64, dr: f64, dtasks: i32| {
             let time_s = e.time_s + dt;
             RouteEval {
@@ -177,8 +196,9 @@ impl<const W: usize> LocalSearch<W> {
             }
             let (a, b) = (route.get(i), route.get(i + 1));
             let (t_ab, d_ab, w_ab, r_ab) = (p.time_s(a, b), p.distance_m(a, b), p.gain(a, b), p.risk_ratio(a, b));
-            // Insert v between a and b: candidates are common neighbours.
-            let common = p.neighbours(a) & p.neighbours(b) & free;
+            // Insert v between a and b: candidates are common neighbours
+            // (on a feasible route, only those whose detour may fit).
+            let common = p.neighbours(a) & p.neighbours(b) & free & may_fit(a, b, t_ab);
             for v in common.iter() {
                 let dt = p.time_s(a, v) + p.time_s(v, b) - t_ab;
                 if !fits(dt) {
@@ -232,7 +252,7 @@ impl<const W: usize> LocalSearch<W> {
             let out_w = p.gain(a, u) + p.gain(u, b);
             let out_r = p.risk_ratio(a, u) + p.risk_ratio(u, b);
             // Replace u by v.
-            let common = p.neighbours(a) & p.neighbours(b) & free;
+            let common = p.neighbours(a) & p.neighbours(b) & free & may_fit(a, b, out_t);
             for v in common.iter() {
                 let dt = p.time_s(a, v) + p.time_s(v, b) - out_t;
                 if !fits(dt) {
@@ -356,13 +376,14 @@ impl<const W: usize> LocalSearch<W> {
             }
             let a = route.get(i - 1);
             let ui = route.get(i);
+            let (row_a, row_ui) = (p.time_row(a), p.time_row(ui));
+            let t_aui = row_a[ui];
             for j in i + 1..len - 1 {
-                let (uj, b) = (route.get(j), route.get(j + 1));
-                if !(p.has_edge(a, uj) && p.has_edge(ui, b)) {
-                    continue;
-                }
-                let dt = p.time_s(a, uj) + p.time_s(ui, b) - p.time_s(a, ui) - p.time_s(uj, b);
-                if !fits(dt) {
+                let (uj, b) = (usize::from(route.ids()[j]), usize::from(route.ids()[j + 1]));
+                // Times first: a missing edge's +∞ rules most reversals out
+                // of a feasible route before the adjacency is read.
+                let dt = row_a[uj] + row_ui[b] - t_aui - legs[j];
+                if !(fits(dt) && p.has_edge(a, uj) && p.has_edge(ui, b)) {
                     continue;
                 }
                 let e = with(
