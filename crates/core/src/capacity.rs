@@ -201,6 +201,26 @@ impl<const W: usize> NodeSet<W> {
         })
     }
 
+    /// The least member ≥ `from`, if any.
+    #[inline]
+    pub fn first_from(self, from: usize) -> Option<usize> {
+        let mut word = from >> 6;
+        if word >= W {
+            return None;
+        }
+        let mut bits = self.0[word] & (u64::MAX << (from & 63));
+        loop {
+            if bits != 0 {
+                return Some(64 * word + bits.trailing_zeros() as usize);
+            }
+            word += 1;
+            if word >= W {
+                return None;
+            }
+            bits = self.0[word];
+        }
+    }
+
     /// The 16 membership bits of ids `base..base + 16` (`base` a multiple
     /// of 16 below 64 · W), lowest id in bit 0.
     #[inline(always)]

@@ -44,6 +44,12 @@ pub struct Moves<const W: usize = DEFAULT_WORDS> {
     dt: PerNode<f64, W>,
     /// Per-fill noise factor of each node.
     noise: PerNode<f64, W>,
+    /// The route the last [`Moves::shorten`] left with no improving move:
+    /// its nodes and the successor of each.
+    settled: NodeSet<W>,
+    settled_next: PerNode<u16, W>,
+    /// The longest segment that call's or-opt moved.
+    settled_segment: usize,
 }
 
 impl<const W: usize> Default for Moves<W> {
@@ -76,18 +82,31 @@ impl<const W: usize> Moves<W> {
             after: PerNode::splat(0),
             dt: PerNode::splat(0.0),
             noise: PerNode::splat(1.0),
+            settled: NodeSet::EMPTY,
+            settled_next: PerNode::splat(0),
+            settled_segment: 0,
         }
     }
 
     /// Sets the objective the moves value changes by (call once per problem).
+    /// It also forgets the settled route [`Moves::shorten`] passes over
+    /// moves by, which belongs to the previous problem.
     pub fn set_objective(&mut self, p: &Problem<W>) {
         self.value = Value::of(p);
+        self.settled = NodeSet::EMPTY;
     }
 
     /// 2-opt and or-opt until no move shortens the route without a loss of
     /// time-independent value (or improves that value without lengthening
     /// it), or `max_rounds` rounds. `e` is re-evaluated exactly. Returns
     /// whether the route changed.
+    ///
+    /// Moves that would only take and make edges of the last route a call
+    /// left with no improving move (its settled route, same problem, edges
+    /// in the same direction, segments no longer than its) are passed over:
+    /// a 2-opt or or-opt move's worth depends on its edges alone, so there
+    /// it was refused. The same moves are made in the same order as by a
+    /// full scan, found sooner on a route that changed in a few places.
     pub fn shorten(
         &mut self,
         p: &Problem<W>,
@@ -96,10 +115,38 @@ impl<const W: usize> Moves<W> {
         max_rounds: u32,
         max_segment: usize,
     ) -> bool {
-        let v = &self.value;
+        let settled = core::mem::replace(&mut self.settled, NodeSet::EMPTY);
+        let mut new_edges = NodeSet::EMPTY;
+        if settled.is_empty() || max_segment > self.settled_segment {
+            new_edges = NodeSet::FULL;
+        }
+        for (k, pair) in route.ids().windows(2).enumerate() {
+            let u = usize::from(pair[0]);
+            if !(settled.contains(u) && self.settled_next[u] == pair[1]) {
+                new_edges.insert(k);
+            }
+        }
+        self.shorten_from(p, route, e, max_rounds, max_segment, new_edges)
+    }
+
+    /// [`Moves::shorten`], its 2-opt sweeps taking only pairs of route
+    /// edges (by position, `k → k + 1`) of which one is in `new_edges`.
+    fn shorten_from(
+        &mut self,
+        p: &Problem<W>,
+        route: &mut Route<W>,
+        e: &mut RouteEval,
+        max_rounds: u32,
+        max_segment: usize,
+        mut new_edges: NodeSet<W>,
+    ) -> bool {
+        let value = self.value;
+        let v = &value;
+        self.settled = NodeSet::EMPTY;
         let accept = |dt: f64, sd: f64| (sd > EPS && dt <= EPS) || (sd >= -EPS && dt < -EPS);
         let ew = |a: usize, b: usize| p.edge_weight(a, b);
         let mut changed = false;
+        let mut settled = false;
         for _ in 0..max_rounds {
             let mut improved = false;
             let len = route.len();
@@ -113,7 +160,15 @@ impl<const W: usize> Moves<W> {
                 // the edge into it change only when a reversal is applied.
                 let mut ui = route.get(i);
                 let (mut row_ui, mut t_aui) = (p.time_row(ui), row_a[ui]);
-                for j in i + 1..len - 1 {
+                let mut j = i + 1;
+                while j < len - 1 {
+                    if !new_edges.contains(i - 1) && !new_edges.contains(j) {
+                        match new_edges.first_from(j) {
+                            Some(next) => j = next,
+                            None => break,
+                        }
+                        continue;
+                    }
                     let (uj, b) = (usize::from(route.ids()[j]), usize::from(route.ids()[j + 1]));
                     // `accept` never takes a move that lengthens the route,
                     // so the time table alone rules most reversals out
@@ -127,17 +182,32 @@ impl<const W: usize> Moves<W> {
                             improved = true;
                             ui = uj;
                             (row_ui, t_aui) = (p.time_row(ui), row_a[ui]);
+                            // Its two new edges, and the reversed ones, whose
+                            // order against the rest changed.
+                            for k in i - 1..=j {
+                                new_edges.insert(k);
+                            }
                         }
                     }
+                    j += 1;
                 }
             }
             if !improved {
-                improved = Self::or_opt(p, v, route, max_segment.min(3), &accept);
+                improved = Self::or_opt(p, v, route, &mut new_edges, max_segment.min(3), &accept);
             }
             if !improved {
+                settled = true;
                 break;
             }
             changed = true;
+        }
+        if settled {
+            self.settled_segment = max_segment;
+            for pair in route.ids().windows(2) {
+                let u = usize::from(pair[0]);
+                self.settled.insert(u);
+                self.settled_next[u] = pair[1];
+            }
         }
         if changed && let Some(x) = p.evaluate(route) {
             *e = x;
@@ -146,10 +216,13 @@ impl<const W: usize> Moves<W> {
     }
 
     /// The first improving or-opt move found, applied.
+    /// Only moves that take or make an edge in `new_edges` (by position)
+    /// are tried; the edges the applied move changes are added to it.
     fn or_opt(
         p: &Problem<W>,
         v: &Value,
         route: &mut Route<W>,
+        new_edges: &mut NodeSet<W>,
         max_segment: usize,
         accept: &impl Fn(f64, f64) -> bool,
     ) -> bool {
@@ -166,8 +239,21 @@ impl<const W: usize> Moves<W> {
                 let (h, t) = (route.get(i), route.get(i + l - 1));
                 let (ah, tb, ab) = (fig(a, h), fig(t, b), fig(a, b));
                 let out = (ah.0 + tb.0 - ab.0, ah.1 + tb.1 - ab.1, ah.2 + tb.2 - ab.2);
-                for k in 0..len - 1 {
+                // A move that changes only edges the settled route had, in
+                // the same order, was refused there: with the segment's
+                // edges all old, only new target edges are tried.
+                let segment_new = (i - 1..i + l).any(|q| new_edges.contains(q));
+                let mut k = 0;
+                while k < len - 1 {
+                    if !segment_new && !new_edges.contains(k) {
+                        match new_edges.first_from(k) {
+                            Some(next) => k = next,
+                            None => break,
+                        }
+                        continue;
+                    }
                     if (i - 1..i + l).contains(&k) {
+                        k += 1;
                         continue;
                     }
                     let (c, d) = (route.get(k), route.get(k + 1));
@@ -188,9 +274,15 @@ impl<const W: usize> Moves<W> {
                         let dr = cx.1 + yd.1 - cd.1 - out.2;
                         if accept(dt, v.static_delta(dw, dr)) {
                             route.relocate(i, l, k, rev);
+                            // Every edge between the segment's old and new
+                            // places moved or changed.
+                            for q in (i - 1).min(k)..=(i + l - 1).max(k) {
+                                new_edges.insert(q);
+                            }
                             return true;
                         }
                     }
+                    k += 1;
                 }
             }
         }
@@ -772,5 +864,66 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Shortening a route that changed in a few places since the last
+    /// settled call (a polish, a ruin, a fill) makes the same moves as
+    /// shortening it afresh: the moves over old edges it passes over were
+    /// refused before.
+    #[test]
+    fn shortening_a_changed_route_makes_the_same_moves_as_afresh() {
+        let (mut settled, mut afresh) = (Moves::new(), Moves::new());
+        let mut ls = crate::solver::local::LocalSearch::new();
+        let mut rng = PlannerRng::new(7);
+        let mut changed = 0;
+        for p in problems() {
+            settled.set_objective(&p);
+            let Some((mut r, mut e)) = direct_route(&p) else {
+                continue;
+            };
+            let mut compare = |settled: &mut Moves, r: &mut Route, e: &mut RouteEval| {
+                let (mut fresh, mut fresh_e) = (*r, *e);
+                let by_settled = settled.shorten(&p, r, e, 100_000, 3);
+                // A new problem's scratch: no settled route, a full scan.
+                afresh.set_objective(&p);
+                let by_fresh = afresh.shorten(&p, &mut fresh, &mut fresh_e, 100_000, 3);
+                assert_eq!(r.to_vec(), fresh.to_vec());
+                assert_eq!((by_settled, *e), (by_fresh, fresh_e));
+                usize::from(by_settled)
+            };
+            for round in 0..16 {
+                settled.fill(&p, &mut r, &mut e, NodeSet::EMPTY, 0.5, &mut rng);
+                if round % 2 == 1 {
+                    ls.improve(&p, &mut r, &mut e, 50);
+                } else if r.len() > 4 {
+                    // Turn a stretch round (whatever that is worth): its
+                    // edges run the other way from the settled route's.
+                    let ids = r.to_vec();
+                    let i = 1 + rng.below(ids.len() as u32 - 3) as usize;
+                    let j = i + 1 + rng.below((ids.len() - 2 - i) as u32) as usize;
+                    let mut turned = ids.clone();
+                    turned[i..=j].reverse();
+                    if let Some((tr, te)) = Route::from_slice(&turned).and_then(|tr| Some((tr, p.evaluate(&tr)?)))
+                        && te.feasible
+                    {
+                        (r, e) = (tr, te);
+                    }
+                }
+                let shape = [Ruin::Segment, Ruin::Random, Ruin::Cluster][round % 3];
+                settled.ruin(&p, &mut r, &mut e, shape, 2 + round, &mut rng);
+                changed += compare(&mut settled, &mut r, &mut e);
+                // Grow it by a few nodes only, so that most edges are old.
+                let mut barred = p.free_nodes(&r);
+                for _ in 0..1 + round % 2 {
+                    let free: Vec<usize> = barred.iter().collect();
+                    if !free.is_empty() {
+                        barred.remove(free[rng.below(free.len() as u32) as usize]);
+                    }
+                }
+                settled.fill(&p, &mut r, &mut e, barred, 0.5, &mut rng);
+                changed += compare(&mut settled, &mut r, &mut e);
+            }
+        }
+        assert!(changed > 20, "only {changed} shortenings changed a route");
     }
 }
