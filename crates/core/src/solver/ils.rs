@@ -379,7 +379,25 @@ impl<const W: usize> Moves<W> {
         let mut time_s = e.time_s;
         for u in free.iter() {
             self.noise[u] = if noise > 0.0 { 1.0 + noise * rng.next_f64() } else { 1.0 };
-            (self.ratio[u], self.after[u], self.dt[u]) = Self::best_place(p, v, route, u, self.noise[u], time_s, limit);
+            (self.ratio[u], self.after[u], self.dt[u]) = (f64::NEG_INFINITY, 0, 0.0);
+        }
+        // Each free node's best place ([`Moves::best_place`] for all of
+        // them at once, route edge by route edge, so that one row pass per
+        // edge rules out the nodes whose detour cannot fit; the margin covers
+        // the rounding of summing the other way round, and `insertion`
+        // decides exactly).
+        for pair in route.ids().windows(2) {
+            let (a, b) = (usize::from(pair[0]), usize::from(pair[1]));
+            let t_ab = p.time_s(a, b);
+            let room = limit - time_s + t_ab;
+            let fit = p.detours_within(a, b, room + 1e-9 * (limit.abs() + time_s.abs() + t_ab.abs()));
+            for u in (free & fit).iter() {
+                if let Some((r, dt)) = Self::insertion(p, v, p.neighbours(u), u, (a, b), self.noise[u], time_s, limit)
+                    && r > self.ratio[u]
+                {
+                    (self.ratio[u], self.after[u], self.dt[u]) = (r, a as u16, dt);
+                }
+            }
         }
         let mut inserted = 0;
         loop {
