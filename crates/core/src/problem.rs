@@ -580,6 +580,15 @@ impl<const W: usize> Problem<W> {
         }
         detours_within_rows(row_a, row_b, within)
     }
+
+    /// The nodes `v` whose detour `a → v → b`, in place of `out_s` s of a
+    /// route of `time_s` s, may keep the route within `limit`: a superset,
+    /// its margin covering the rounding of summing the detour the other way
+    /// round, so the caller's exact test still decides.
+    pub fn detours_fitting(&self, a: usize, b: usize, out_s: f64, time_s: f64, limit: f64) -> NodeSet<W> {
+        let room = limit - time_s + out_s;
+        self.detours_within(a, b, room + 1e-9 * (limit.abs() + time_s.abs() + out_s.abs()))
+    }
 }
 
 impl<const W: usize> Default for Problem<W> {

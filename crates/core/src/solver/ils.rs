@@ -115,6 +115,9 @@ impl<const W: usize> Moves<W> {
         max_rounds: u32,
         max_segment: usize,
     ) -> bool {
+        // The route's edges (by position, `k → k + 1`) the settled route did
+        // not have in that direction; the settled route is forgotten until
+        // this call settles.
         let settled = core::mem::replace(&mut self.settled, NodeSet::EMPTY);
         let mut new_edges = NodeSet::EMPTY;
         if settled.is_empty() || max_segment > self.settled_segment {
@@ -126,27 +129,11 @@ impl<const W: usize> Moves<W> {
                 new_edges.insert(k);
             }
         }
-        self.shorten_from(p, route, e, max_rounds, max_segment, new_edges)
-    }
-
-    /// [`Moves::shorten`], its 2-opt sweeps taking only pairs of route
-    /// edges (by position, `k → k + 1`) of which one is in `new_edges`.
-    fn shorten_from(
-        &mut self,
-        p: &Problem<W>,
-        route: &mut Route<W>,
-        e: &mut RouteEval,
-        max_rounds: u32,
-        max_segment: usize,
-        mut new_edges: NodeSet<W>,
-    ) -> bool {
-        let value = self.value;
-        let v = &value;
-        self.settled = NodeSet::EMPTY;
+        let v = &self.value;
         let accept = |dt: f64, sd: f64| (sd > EPS && dt <= EPS) || (sd >= -EPS && dt < -EPS);
         let ew = |a: usize, b: usize| p.edge_weight(a, b);
         let mut changed = false;
-        let mut settled = false;
+        let mut converged = false;
         for _ in 0..max_rounds {
             let mut improved = false;
             let len = route.len();
@@ -196,12 +183,12 @@ impl<const W: usize> Moves<W> {
                 improved = Self::or_opt(p, v, route, &mut new_edges, max_segment.min(3), &accept);
             }
             if !improved {
-                settled = true;
+                converged = true;
                 break;
             }
             changed = true;
         }
-        if settled {
+        if converged {
             self.settled_segment = max_segment;
             for pair in route.ids().windows(2) {
                 let u = usize::from(pair[0]);
@@ -383,14 +370,11 @@ impl<const W: usize> Moves<W> {
         }
         // Each free node's best place ([`Moves::best_place`] for all of
         // them at once, route edge by route edge, so that one row pass per
-        // edge rules out the nodes whose detour cannot fit; the margin covers
-        // the rounding of summing the other way round, and `insertion`
+        // edge rules out the nodes whose detour cannot fit; `insertion`
         // decides exactly).
         for pair in route.ids().windows(2) {
             let (a, b) = (usize::from(pair[0]), usize::from(pair[1]));
-            let t_ab = p.time_s(a, b);
-            let room = limit - time_s + t_ab;
-            let fit = p.detours_within(a, b, room + 1e-9 * (limit.abs() + time_s.abs() + t_ab.abs()));
+            let fit = p.detours_fitting(a, b, p.time_s(a, b), time_s, limit);
             for u in (free & fit).iter() {
                 if let Some((r, dt)) = Self::insertion(p, v, p.neighbours(u), u, (a, b), self.noise[u], time_s, limit)
                     && r > self.ratio[u]

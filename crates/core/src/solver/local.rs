@@ -169,14 +169,12 @@ impl<const W: usize> LocalSearch<W> {
         // candidates out on a route that uses its budget.
         let fits = |dt: f64| !eval.feasible || eval.time_s + dt <= limit;
         // A superset of the nodes v for which a detour a → v → b in place of
-        // `out_t` s of the route `fits`: the margin covers the rounding of
-        // the two ways of summing, so `fits` alone still decides.
+        // `out_t` s of the route `fits` (which alone still decides).
         let may_fit = |a: usize, b: usize, out_t: f64| {
             if !eval.feasible {
                 return NodeSet::FULL;
             }
-            let room = limit - eval.time_s + out_t;
-            p.detours_within(a, b, room + 1e-9 * (limit.abs() + eval.time_s.abs() + out_t.abs()))
+            p.detours_fitting(a, b, out_t, eval.time_s, limit)
         };
         let with = |e: &RouteEval, dt: f64, dd: f64, dw: f64, dr: f64, dtasks: i32| {
             let time_s = e.time_s + dt;
