@@ -574,9 +574,15 @@ impl<const W: usize> Problem<W> {
     pub fn detours_within(&self, a: usize, b: usize, within: f64) -> NodeSet<W> {
         let (row_a, row_b) = (self.time_row(a), self.time_row(b));
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU runs AVX2 (checked just above).
-            return unsafe { detours_within_avx2(row_a, row_b, within) };
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU runs AVX-512F (checked just above).
+                return unsafe { detours_within_avx512(row_a, row_b, within) };
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU runs AVX2 (checked just above).
+                return unsafe { detours_within_avx2(row_a, row_b, within) };
+            }
         }
         detours_within_rows(row_a, row_b, within)
     }
@@ -617,7 +623,9 @@ fn detours_within_rows<const W: usize>(row_a: &[f64], row_b: &[f64], within: f64
 }
 
 /// [`detours_within_rows`] with AVX2: four sums and compares per
-/// instruction, their signs gathered by `movemask`.
+/// instruction, their signs gathered by `movemask`. Each word of the set
+/// is built in a register and stored once (OR-ing every quad into memory
+/// made the loop wait on its own stores).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn detours_within_avx2<const W: usize>(row_a: &[f64], row_b: &[f64], within: f64) -> NodeSet<W> {
@@ -626,18 +634,58 @@ fn detours_within_avx2<const W: usize>(row_a: &[f64], row_b: &[f64], within: f64
     };
     let limit = _mm256_set1_pd(within);
     let mut set = NodeSet::EMPTY;
-    let quads = row_a.len().min(row_b.len()) / 4;
-    for q in 0..quads {
-        // SAFETY: 4q + 3 < the length of both rows.
-        let (xa, xb) = unsafe {
-            (
-                _mm256_loadu_pd(row_a.as_ptr().add(4 * q)),
-                _mm256_loadu_pd(row_b.as_ptr().add(4 * q)),
-            )
-        };
-        let bits = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_add_pd(xa, xb), limit)) as u64;
-        let base = 4 * q;
-        set.0[base >> 6] |= bits << (base & 63);
+    let len = row_a.len().min(row_b.len()).min(64 * W);
+    for (word, bits_out) in set.0.iter_mut().enumerate() {
+        let base = 64 * word;
+        let end = len.min(base + 64);
+        let mut bits = 0u64;
+        let mut k = base;
+        while k + 4 <= end {
+            // SAFETY: k + 3 < len ≤ the length of both rows.
+            let (xa, xb) = unsafe {
+                (
+                    _mm256_loadu_pd(row_a.as_ptr().add(k)),
+                    _mm256_loadu_pd(row_b.as_ptr().add(k)),
+                )
+            };
+            let quad = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_add_pd(xa, xb), limit)) as u64;
+            bits |= quad << (k - base);
+            k += 4;
+        }
+        *bits_out = bits;
+    }
+    set
+}
+
+/// [`detours_within_rows`] with AVX-512: eight sums and compares per
+/// instruction straight into a mask; each word of the set is built in a
+/// register and stored once.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn detours_within_avx512<const W: usize>(row_a: &[f64], row_b: &[f64], within: f64) -> NodeSet<W> {
+    use core::arch::x86_64::{_CMP_LE_OQ, _mm512_add_pd, _mm512_cmp_pd_mask, _mm512_loadu_pd, _mm512_set1_pd};
+    let limit = _mm512_set1_pd(within);
+    let mut set = NodeSet::EMPTY;
+    // Rows come in whole scan blocks (16 entries), so in whole octets.
+    let len = row_a.len().min(row_b.len()).min(64 * W);
+    for (word, bits_out) in set.0.iter_mut().enumerate() {
+        let base = 64 * word;
+        let end = len.min(base + 64);
+        let mut bits = 0u64;
+        let mut k = base;
+        while k + 8 <= end {
+            // SAFETY: k + 7 < len ≤ the length of both rows.
+            let (xa, xb) = unsafe {
+                (
+                    _mm512_loadu_pd(row_a.as_ptr().add(k)),
+                    _mm512_loadu_pd(row_b.as_ptr().add(k)),
+                )
+            };
+            let octet = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_add_pd(xa, xb), limit) as u64;
+            bits |= octet << (k - base);
+            k += 8;
+        }
+        *bits_out = bits;
     }
     set
 }
@@ -812,10 +860,41 @@ mod tests {
         ));
     }
 
+    /// Every kernel of the dense row filter this CPU runs, and the portable
+    /// one, hold exactly the nodes whose two edge times sum within `within`.
+    fn check_detours_within<const W: usize>(
+        p: &crate::problem::Problem<W>,
+        a: usize,
+        b: usize,
+        within: f64,
+    ) -> Result<(), proptest::test_runner::TestCaseError> {
+        let mut expected = crate::problem::NodeSet::<W>::EMPTY;
+        for v in 0..p.n() {
+            if p.time_s(a, v) + p.time_s(v, b) <= within {
+                expected.insert(v);
+            }
+        }
+        proptest::prop_assert_eq!(p.detours_within(a, b, within), expected);
+        let (row_a, row_b) = (p.time_row(a), p.time_row(b));
+        proptest::prop_assert_eq!(detours_within_rows::<W>(row_a, row_b, within), expected);
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU runs AVX2 (checked just above).
+                proptest::prop_assert_eq!(unsafe { detours_within_avx2::<W>(row_a, row_b, within) }, expected);
+            }
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU runs AVX-512F (checked just above).
+                proptest::prop_assert_eq!(unsafe { detours_within_avx512::<W>(row_a, row_b, within) }, expected);
+            }
+        }
+        Ok(())
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
-        /// The dense row filter, on this CPU's kernel and the portable one,
-        /// holds exactly the nodes whose two edge times sum within the limit.
+        /// The dense row filter, in the 128-node class and (more words than
+        /// the rows fill) the 512-node class.
         #[test]
         fn detours_within_is_the_row_sum_test(
             seed in 0u64..10_000,
@@ -824,20 +903,28 @@ mod tests {
             pair in (0usize..128, 0usize..128),
             within in 0.0f64..20_000.0,
         ) {
-            let built = Problem::from_instance(&crate::fixtures::random_instance(n, density, 30_000.0, seed));
+            let inst = crate::fixtures::random_instance(n, density, 30_000.0, seed);
             // A network whose goal is out of reach is rejected before any table is read.
+            let built = Problem::from_instance(&inst);
             proptest::prop_assume!(built.is_ok());
-            let p = built.unwrap();
             let (a, b) = (pair.0 % n, pair.1 % n);
-            let mut expected = NodeSet::EMPTY;
-            for v in 0..n {
-                if p.time_s(a, v) + p.time_s(v, b) <= within {
-                    expected.insert(v);
-                }
-            }
-            proptest::prop_assert_eq!(p.detours_within(a, b, within), expected);
-            let portable: NodeSet = detours_within_rows(p.time_row(a), p.time_row(b), within);
-            proptest::prop_assert_eq!(portable, expected);
+            check_detours_within(&built.unwrap(), a, b, within)?;
+            let wide = crate::problem::Problem::<8>::from_instance(&inst).unwrap();
+            check_detours_within(&wide, a, b, within)?;
+        }
+
+        /// The same in the 512-node class on networks of more than 128 nodes.
+        #[test]
+        fn detours_within_is_the_row_sum_on_large_networks(
+            seed in 0u64..10_000,
+            n in 129usize..=300,
+            pair in (0usize..300, 0usize..300),
+            within in 0.0f64..20_000.0,
+        ) {
+            let inst = crate::fixtures::random_instance(n, 0.5, 30_000.0, seed);
+            let built = crate::problem::Problem::<8>::from_instance(&inst);
+            proptest::prop_assume!(built.is_ok());
+            check_detours_within(&built.unwrap(), pair.0 % n, pair.1 % n, within)?;
         }
     }
 }
