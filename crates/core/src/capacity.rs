@@ -221,6 +221,21 @@ impl<const W: usize> NodeSet<W> {
         }
     }
 
+    /// The membership bits of ids `from..from + 8`, lowest id in bit 0
+    /// (ids past the set's capacity read as absent).
+    #[inline(always)]
+    pub fn octet_from(self, from: usize) -> u8 {
+        let (word, shift) = (from >> 6, from & 63);
+        if word >= W {
+            return 0;
+        }
+        let mut bits = self.0[word] >> shift;
+        if shift > 56 && word + 1 < W {
+            bits |= self.0[word + 1] << (64 - shift);
+        }
+        bits as u8
+    }
+
     /// The 16 membership bits of ids `base..base + 16` (`base` a multiple
     /// of 16 below 64 · W), lowest id in bit 0.
     #[inline(always)]
@@ -334,6 +349,12 @@ impl<'a, T, const W: usize> IntoIterator for &'a mut PerNode<T, W> {
 mod tests {
     use super::*;
 
+    impl<const W: usize> NodeSet<W> {
+        fn contains_checked(self, id: usize) -> bool {
+            id < nodes_of(W) && self.contains(id)
+        }
+    }
+
     fn basics<const W: usize>() {
         let top = nodes_of(W) - 1;
         let mut s = NodeSet::<W>::EMPTY;
@@ -353,6 +374,17 @@ mod tests {
         assert_eq!((f & s).iter().collect::<Vec<_>>(), vec![0]);
         assert_eq!((f | s), NodeSet::FULL);
         assert_eq!(NodeSet::<W>::single(top).block16(nodes_of(W) - 16), 1 << 15);
+        // Octets at every offset, across word boundaries and past the end.
+        let mut odd = NodeSet::<W>::EMPTY;
+        for id in (1..nodes_of(W)).step_by(3) {
+            odd.insert(id);
+        }
+        for from in 0..nodes_of(W) + 8 {
+            let want = (0..8)
+                .filter(|k| odd.contains_checked(from + k))
+                .fold(0u8, |o, k| o | 1 << k);
+            assert_eq!(odd.octet_from(from), want, "from {from}");
+        }
         let p = PerNode::<u16, W>::splat(3);
         assert_eq!(p.len(), nodes_of(W));
         assert!(p.iter().all(|&x| x == 3));

@@ -587,6 +587,75 @@ impl<const W: usize> Problem<W> {
         detours_within_rows(row_a, row_b, within)
     }
 
+    /// Whether [`Problem::reversals_within`] runs eight lanes at once on
+    /// this CPU (AVX-512 gathers); without, a caller tests one lane a time.
+    pub fn reversals_in_octets() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512bw")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        false
+    }
+
+    /// Of the 2-opt reversals of a route (node ids `ids`) whose segment
+    /// starts at node `ui` after node `a` and ends at a position
+    /// `k ∈ j .. min(j + 8, end)` (`end` < `ids.len()`), those whose time
+    /// change `t(a, ids[k]) + t(ui, ids[k + 1]) − t(a, ui) − t(ids[k], ids[k + 1])`
+    /// is at most `eps`, as bit `k − j`. The sums run in that order, so a
+    /// caller's own scalar test of a lane gives the same verdict.
+    pub fn reversals_within(&self, ids: &[u16], a: usize, ui: usize, j: usize, end: usize, eps: f64) -> u8 {
+        let end = end.min(ids.len().saturating_sub(1)).min(j + 8);
+        #[cfg(target_arch = "x86_64")]
+        if Self::reversals_in_octets() && j < end {
+            // SAFETY: the CPU runs AVX-512F, BW and VL (checked just above);
+            // j < end < ids.len().
+            return unsafe { self.reversals_within_avx512(ids, a, ui, j, end, eps) };
+        }
+        let (row_a, row_ui, t_aui) = (self.time_row(a), self.time_row(ui), self.time_s(a, ui));
+        let mut lanes = 0u8;
+        for k in j..end {
+            let (uk, b) = (usize::from(ids[k]), usize::from(ids[k + 1]));
+            if row_a[uk] + row_ui[b] - t_aui - self.time_s(uk, b) <= eps {
+                lanes |= 1 << (k - j);
+            }
+        }
+        lanes
+    }
+
+    /// [`Problem::reversals_within`] with gathers, eight lanes at once.
+    ///
+    /// # Safety
+    /// The CPU runs AVX-512F, BW and VL, and `j < end < ids.len()`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512bw,avx512vl")]
+    unsafe fn reversals_within_avx512(&self, ids: &[u16], a: usize, ui: usize, j: usize, end: usize, eps: f64) -> u8 {
+        use core::arch::x86_64::*;
+        let table = flat(&self.tables.time_s);
+        let (row_a, row_ui) = (self.time_row(a), self.time_row(ui));
+        let valid: __mmask8 = ((1u32 << (end - j)) - 1) as __mmask8;
+        // SAFETY: lanes below end − j read ids[j ..= end] (end < ids.len());
+        // masked-off lanes read nothing. Every id is a node < n, so the
+        // gathers stay inside row a, row ui (stride entries each) and the
+        // n × stride table.
+        unsafe {
+            let here = _mm256_cvtepu16_epi32(_mm_maskz_loadu_epi16(valid, ids.as_ptr().add(j).cast()));
+            let next = _mm256_cvtepu16_epi32(_mm_maskz_loadu_epi16(valid, ids.as_ptr().add(j + 1).cast()));
+            let leg = _mm256_add_epi32(_mm256_mullo_epi32(here, _mm256_set1_epi32(self.stride as i32)), next);
+            let zero = _mm512_setzero_pd();
+            let t_a = _mm512_mask_i32gather_pd::<8>(zero, valid, here, row_a.as_ptr());
+            let t_ui = _mm512_mask_i32gather_pd::<8>(zero, valid, next, row_ui.as_ptr());
+            let t_leg = _mm512_mask_i32gather_pd::<8>(zero, valid, leg, table.as_ptr());
+            let dt = _mm512_sub_pd(
+                _mm512_sub_pd(_mm512_add_pd(t_a, t_ui), _mm512_set1_pd(row_a[ui])),
+                t_leg,
+            );
+            _mm512_mask_cmp_pd_mask::<_CMP_LE_OQ>(valid, dt, _mm512_set1_pd(eps))
+        }
+    }
+
     /// The nodes `v` whose detour `a → v → b`, in place of `out_s` s of a
     /// route of `time_s` s, may keep the route within `limit`: a superset,
     /// its margin covering the rounding of summing the detour the other way
@@ -891,6 +960,29 @@ mod tests {
         Ok(())
     }
 
+    /// [`Problem::reversals_within`] (this CPU's kernel) holds exactly the
+    /// ends whose time change, summed as the definition says, is ≤ `eps`.
+    fn check_reversals_within<const W: usize>(
+        p: &crate::problem::Problem<W>,
+        ids: &[u16],
+        a: usize,
+        ui: usize,
+        eps: f64,
+    ) -> Result<(), proptest::test_runner::TestCaseError> {
+        let end = ids.len() - 1;
+        for j in 0..end {
+            let mut expected = 0u8;
+            for k in j..end.min(j + 8) {
+                let (uk, b) = (usize::from(ids[k]), usize::from(ids[k + 1]));
+                if p.time_s(a, uk) + p.time_s(ui, b) - p.time_s(a, ui) - p.time_s(uk, b) <= eps {
+                    expected |= 1 << (k - j);
+                }
+            }
+            proptest::prop_assert_eq!(p.reversals_within(ids, a, ui, j, end, eps), expected, "j = {}", j);
+        }
+        Ok(())
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
         /// The dense row filter, in the 128-node class and (more words than
@@ -925,6 +1017,31 @@ mod tests {
             let built = crate::problem::Problem::<8>::from_instance(&inst);
             proptest::prop_assume!(built.is_ok());
             check_detours_within(&built.unwrap(), pair.0 % n, pair.1 % n, within)?;
+        }
+
+        /// The 2-opt pre-filter, on routes of up to 300 nodes in the 128- and
+        /// 512-node classes, at thresholds around the changes that occur.
+        #[test]
+        fn reversals_within_is_the_time_change_test(
+            seed in 0u64..10_000,
+            n in 3usize..=300,
+            density in 0.1f64..1.0,
+            picks in proptest::collection::vec(0usize..300, 2..300),
+            ends in (0usize..300, 0usize..300),
+            eps in -3_000.0f64..3_000.0,
+        ) {
+            let inst = crate::fixtures::random_instance(n, density, 30_000.0, seed);
+            // A route's ids: any nodes, each once (the kernel reads only ids).
+            let mut seen = std::collections::BTreeSet::new();
+            let ids: Vec<u16> = picks.iter().map(|&v| (v % n) as u16).filter(|&v| seen.insert(v)).collect();
+            proptest::prop_assume!(ids.len() >= 2);
+            let (a, ui) = (ends.0 % n, ends.1 % n);
+            if n <= 128 && let Ok(p) = Problem::from_instance(&inst) {
+                check_reversals_within(&p, &ids, a, ui, eps)?;
+            }
+            if let Ok(p) = crate::problem::Problem::<8>::from_instance(&inst) {
+                check_reversals_within(&p, &ids, a, ui, eps)?;
+            }
         }
     }
 }

@@ -134,6 +134,7 @@ impl<const W: usize> Moves<W> {
         let ew = |a: usize, b: usize| p.edge_weight(a, b);
         let mut changed = false;
         let mut converged = false;
+        let octets = Problem::<W>::reversals_in_octets();
         for _ in 0..max_rounds {
             let mut improved = false;
             let len = route.len();
@@ -149,34 +150,56 @@ impl<const W: usize> Moves<W> {
                 let (mut row_ui, mut t_aui) = (p.time_row(ui), row_a[ui]);
                 let mut j = i + 1;
                 while j < len - 1 {
-                    if !new_edges.contains(i - 1) && !new_edges.contains(j) {
+                    let all_new = new_edges.contains(i - 1);
+                    if !all_new && !new_edges.contains(j) {
                         match new_edges.first_from(j) {
                             Some(next) => j = next,
                             None => break,
                         }
                         continue;
                     }
-                    let (uj, b) = (usize::from(route.ids()[j]), usize::from(route.ids()[j + 1]));
-                    // `accept` never takes a move that lengthens the route,
-                    // so the time table alone rules most reversals out
-                    // before the larger edge records are read.
-                    let dt = row_a[uj] + row_ui[b] - t_aui - p.time_s(uj, b);
-                    if dt <= EPS && p.has_edge(a, uj) && p.has_edge(ui, b) {
-                        let dw = ew(a, uj) + ew(ui, b) - ew(a, ui) - ew(uj, b);
-                        let dr = p.risk_ratio(a, uj) + p.risk_ratio(ui, b) - p.risk_ratio(a, ui) - p.risk_ratio(uj, b);
-                        if accept(dt, v.static_delta(dw, dr)) {
-                            route.reverse(i, j);
-                            improved = true;
-                            ui = uj;
-                            (row_ui, t_aui) = (p.time_row(ui), row_a[ui]);
-                            // Its two new edges, and the reversed ones, whose
-                            // order against the rest changed.
-                            for k in i - 1..=j {
-                                new_edges.insert(k);
+                    // The ends j.. worth a closer look: with gathers eight
+                    // at a time, those whose time change alone may be
+                    // accepted (the test below, in the same sums) and that
+                    // touch a new edge; else just j.
+                    let (mut lanes, width) = if octets {
+                        let fit = p.reversals_within(route.ids(), a, ui, j, len - 1, EPS);
+                        (if all_new { fit } else { fit & new_edges.octet_from(j) }, 8)
+                    } else {
+                        (1, 1)
+                    };
+                    let mut next = j + width;
+                    while lanes != 0 {
+                        let k = j + lanes.trailing_zeros() as usize;
+                        lanes &= lanes - 1;
+                        let (uk, b) = (usize::from(route.ids()[k]), usize::from(route.ids()[k + 1]));
+                        // `accept` never takes a move that lengthens the
+                        // route, so the time table alone rules most
+                        // reversals out before the larger edge records are
+                        // read.
+                        let dt = row_a[uk] + row_ui[b] - t_aui - p.time_s(uk, b);
+                        if dt <= EPS && p.has_edge(a, uk) && p.has_edge(ui, b) {
+                            let dw = ew(a, uk) + ew(ui, b) - ew(a, ui) - ew(uk, b);
+                            let dr =
+                                p.risk_ratio(a, uk) + p.risk_ratio(ui, b) - p.risk_ratio(a, ui) - p.risk_ratio(uk, b);
+                            if accept(dt, v.static_delta(dw, dr)) {
+                                route.reverse(i, k);
+                                improved = true;
+                                ui = uk;
+                                (row_ui, t_aui) = (p.time_row(ui), row_a[ui]);
+                                // Its two new edges, and the reversed ones,
+                                // whose order against the rest changed.
+                                for q in i - 1..=k {
+                                    new_edges.insert(q);
+                                }
+                                // The lanes after k were judged against the
+                                // route before this reversal.
+                                next = k + 1;
+                                break;
                             }
                         }
                     }
-                    j += 1;
+                    j = next;
                 }
             }
             if !improved {
