@@ -159,10 +159,11 @@ impl<const W: usize> Moves<W> {
                         continue;
                     }
                     // The ends j.. worth a closer look: with gathers eight
-                    // at a time, those whose time change alone may be
-                    // accepted (the test below, in the same sums) and that
-                    // touch a new edge; else just j.
-                    let (mut lanes, width) = if octets {
+                    // at a time where eight remain (shorter stretches cost
+                    // more in gathers than they save), those whose time
+                    // change alone may be accepted (the test below, in the
+                    // same sums) and that touch a new edge; else just j.
+                    let (mut lanes, width) = if octets && j + 8 < len {
                         let fit = p.reversals_within(route.ids(), a, ui, j, len - 1, EPS);
                         (if all_new { fit } else { fit & new_edges.octet_from(j) }, 8)
                     } else {
