@@ -587,9 +587,10 @@ impl<const W: usize> Problem<W> {
         detours_within_rows(row_a, row_b, within)
     }
 
-    /// Whether [`Problem::reversals_within`] runs eight lanes at once on
-    /// this CPU (AVX-512 gathers); without, a caller tests one lane a time.
-    pub fn reversals_in_octets() -> bool {
+    /// Whether [`Problem::reversals_within`] and
+    /// [`Problem::relocations_within`] run eight lanes at once on this CPU
+    /// (AVX-512 gathers); without, a caller tests one lane a time.
+    pub fn route_scans_in_octets() -> bool {
         #[cfg(target_arch = "x86_64")]
         {
             std::arch::is_x86_feature_detected!("avx512f")
@@ -609,10 +610,10 @@ impl<const W: usize> Problem<W> {
     pub fn reversals_within(&self, ids: &[u16], a: usize, ui: usize, j: usize, end: usize, eps: f64) -> u8 {
         let end = end.min(ids.len().saturating_sub(1)).min(j + 8);
         #[cfg(target_arch = "x86_64")]
-        if Self::reversals_in_octets() && j < end {
+        if Self::route_scans_in_octets() && j < end {
             // SAFETY: the CPU runs AVX-512F, BW and VL (checked just above);
             // j < end < ids.len().
-            return unsafe { self.reversals_within_avx512(ids, a, ui, j, end, eps) };
+            return unsafe { self.route_scan_avx512(ids, a, ui, j, end, RouteScan::Reversal { eps }) };
         }
         let (row_a, row_ui, t_aui) = (self.time_row(a), self.time_row(ui), self.time_s(a, ui));
         let mut lanes = 0u8;
@@ -625,33 +626,76 @@ impl<const W: usize> Problem<W> {
         lanes
     }
 
-    /// [`Problem::reversals_within`] with gathers, eight lanes at once.
+    /// Of the places of a route (node ids `ids`) between positions `k` and
+    /// `k + 1`, `k ∈ j .. min(j + 8, end)` (`end` < `ids.len()`), those where
+    /// moving a segment that runs from node `x` to node `y` (taken out for
+    /// `out_s` s) changes the route's time by at most `eps`:
+    /// `t(ids[k], x) + t(y, ids[k + 1]) − t(ids[k], ids[k + 1]) − out_s ≤ eps`,
+    /// as bit `k − j`, summed in that order (so a caller's own scalar test
+    /// of a lane gives the same verdict).
+    #[allow(clippy::too_many_arguments)]
+    pub fn relocations_within(
+        &self,
+        ids: &[u16],
+        x: usize,
+        y: usize,
+        j: usize,
+        end: usize,
+        out_s: f64,
+        eps: f64,
+    ) -> u8 {
+        let end = end.min(ids.len().saturating_sub(1)).min(j + 8);
+        #[cfg(target_arch = "x86_64")]
+        if Self::route_scans_in_octets() && j < end {
+            // SAFETY: the CPU runs AVX-512F, BW and VL (checked just above);
+            // j < end < ids.len().
+            return unsafe { self.route_scan_avx512(ids, x, y, j, end, RouteScan::Relocation { out_s, eps }) };
+        }
+        let mut lanes = 0u8;
+        for k in j..end {
+            let (c, d) = (usize::from(ids[k]), usize::from(ids[k + 1]));
+            if self.time_s(c, x) + self.time_s(y, d) - self.time_s(c, d) - out_s <= eps {
+                lanes |= 1 << (k - j);
+            }
+        }
+        lanes
+    }
+
+    /// The route scans with gathers, eight lanes at once: for each position
+    /// k, `t(x, ids[k])`, `t(y, ids[k + 1])` and the route's own edge time
+    /// (the table is symmetric), combined as `scan` says.
     ///
     /// # Safety
     /// The CPU runs AVX-512F, BW and VL, and `j < end < ids.len()`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512bw,avx512vl")]
-    unsafe fn reversals_within_avx512(&self, ids: &[u16], a: usize, ui: usize, j: usize, end: usize, eps: f64) -> u8 {
+    unsafe fn route_scan_avx512(&self, ids: &[u16], x: usize, y: usize, j: usize, end: usize, scan: RouteScan) -> u8 {
         use core::arch::x86_64::*;
         let table = flat(&self.tables.time_s);
-        let (row_a, row_ui) = (self.time_row(a), self.time_row(ui));
+        let (row_x, row_y) = (self.time_row(x), self.time_row(y));
         let valid: __mmask8 = ((1u32 << (end - j)) - 1) as __mmask8;
         // SAFETY: lanes below end − j read ids[j ..= end] (end < ids.len());
         // masked-off lanes read nothing. Every id is a node < n, so the
-        // gathers stay inside row a, row ui (stride entries each) and the
+        // gathers stay inside row x, row y (stride entries each) and the
         // n × stride table.
         unsafe {
             let here = _mm256_cvtepu16_epi32(_mm_maskz_loadu_epi16(valid, ids.as_ptr().add(j).cast()));
             let next = _mm256_cvtepu16_epi32(_mm_maskz_loadu_epi16(valid, ids.as_ptr().add(j + 1).cast()));
             let leg = _mm256_add_epi32(_mm256_mullo_epi32(here, _mm256_set1_epi32(self.stride as i32)), next);
             let zero = _mm512_setzero_pd();
-            let t_a = _mm512_mask_i32gather_pd::<8>(zero, valid, here, row_a.as_ptr());
-            let t_ui = _mm512_mask_i32gather_pd::<8>(zero, valid, next, row_ui.as_ptr());
+            let t_x = _mm512_mask_i32gather_pd::<8>(zero, valid, here, row_x.as_ptr());
+            let t_y = _mm512_mask_i32gather_pd::<8>(zero, valid, next, row_y.as_ptr());
             let t_leg = _mm512_mask_i32gather_pd::<8>(zero, valid, leg, table.as_ptr());
-            let dt = _mm512_sub_pd(
-                _mm512_sub_pd(_mm512_add_pd(t_a, t_ui), _mm512_set1_pd(row_a[ui])),
-                t_leg,
-            );
+            let (dt, eps) = match scan {
+                RouteScan::Reversal { eps } => (
+                    _mm512_sub_pd(_mm512_sub_pd(_mm512_add_pd(t_x, t_y), _mm512_set1_pd(row_x[y])), t_leg),
+                    eps,
+                ),
+                RouteScan::Relocation { out_s, eps } => (
+                    _mm512_sub_pd(_mm512_sub_pd(_mm512_add_pd(t_x, t_y), t_leg), _mm512_set1_pd(out_s)),
+                    eps,
+                ),
+            };
             _mm512_mask_cmp_pd_mask::<_CMP_LE_OQ>(valid, dt, _mm512_set1_pd(eps))
         }
     }
@@ -664,6 +708,16 @@ impl<const W: usize> Problem<W> {
         let room = limit - time_s + out_s;
         self.detours_within(a, b, room + 1e-9 * (limit.abs() + time_s.abs() + out_s.abs()))
     }
+}
+
+/// What [`Problem::route_scan_avx512`] sums per route position.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+enum RouteScan {
+    /// [`Problem::reversals_within`].
+    Reversal { eps: f64 },
+    /// [`Problem::relocations_within`].
+    Relocation { out_s: f64, eps: f64 },
 }
 
 impl<const W: usize> Default for Problem<W> {
@@ -983,6 +1037,34 @@ mod tests {
         Ok(())
     }
 
+    /// [`Problem::relocations_within`] (this CPU's kernel) holds exactly the
+    /// places whose time change, summed as the definition says, is ≤ `eps`.
+    fn check_relocations_within<const W: usize>(
+        p: &crate::problem::Problem<W>,
+        ids: &[u16],
+        (x, y): (usize, usize),
+        out_s: f64,
+        eps: f64,
+    ) -> Result<(), proptest::test_runner::TestCaseError> {
+        let end = ids.len() - 1;
+        for j in 0..end {
+            let mut expected = 0u8;
+            for k in j..end.min(j + 8) {
+                let (c, d) = (usize::from(ids[k]), usize::from(ids[k + 1]));
+                if p.time_s(c, x) + p.time_s(y, d) - p.time_s(c, d) - out_s <= eps {
+                    expected |= 1 << (k - j);
+                }
+            }
+            proptest::prop_assert_eq!(
+                p.relocations_within(ids, x, y, j, end, out_s, eps),
+                expected,
+                "j = {}",
+                j
+            );
+        }
+        Ok(())
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
         /// The dense row filter, in the 128-node class and (more words than
@@ -1041,6 +1123,31 @@ mod tests {
             }
             if let Ok(p) = crate::problem::Problem::<8>::from_instance(&inst) {
                 check_reversals_within(&p, &ids, a, ui, eps)?;
+            }
+        }
+
+        /// The or-opt pre-filter, on routes of up to 300 nodes in the 128-
+        /// and 512-node classes, at thresholds around the changes that occur.
+        #[test]
+        fn relocations_within_is_the_time_change_test(
+            seed in 0u64..10_000,
+            n in 3usize..=300,
+            density in 0.1f64..1.0,
+            picks in proptest::collection::vec(0usize..300, 2..300),
+            ends in (0usize..300, 0usize..300),
+            out_s in 0.0f64..6_000.0,
+            eps in -3_000.0f64..3_000.0,
+        ) {
+            let inst = crate::fixtures::random_instance(n, density, 30_000.0, seed);
+            let mut seen = std::collections::BTreeSet::new();
+            let ids: Vec<u16> = picks.iter().map(|&v| (v % n) as u16).filter(|&v| seen.insert(v)).collect();
+            proptest::prop_assume!(ids.len() >= 2);
+            let segment = (ends.0 % n, ends.1 % n);
+            if n <= 128 && let Ok(p) = Problem::from_instance(&inst) {
+                check_relocations_within(&p, &ids, segment, out_s, eps)?;
+            }
+            if let Ok(p) = crate::problem::Problem::<8>::from_instance(&inst) {
+                check_relocations_within(&p, &ids, segment, out_s, eps)?;
             }
         }
     }
