@@ -745,10 +745,31 @@ fn detours_within_rows<const W: usize>(row_a: &[f64], row_b: &[f64], within: f64
     set
 }
 
+/// A node set from `len` sums, `lanes` per step: `step_bits(k)` gives the
+/// bits of nodes `k .. k + lanes` (k a multiple of `lanes`, `k + lanes ≤
+/// len`). Each word is built in a register and stored once: OR-ing every
+/// step into the set in memory made the kernels wait on their own stores.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn node_set_by_steps<const W: usize>(len: usize, lanes: usize, mut step_bits: impl FnMut(usize) -> u64) -> NodeSet<W> {
+    let len = len.min(64 * W);
+    let mut set = NodeSet::EMPTY;
+    for (word, bits_out) in set.0.iter_mut().enumerate() {
+        let base = 64 * word;
+        let end = len.min(base + 64);
+        let mut bits = 0u64;
+        let mut k = base;
+        while k + lanes <= end {
+            bits |= step_bits(k) << (k - base);
+            k += lanes;
+        }
+        *bits_out = bits;
+    }
+    set
+}
+
 /// [`detours_within_rows`] with AVX2: four sums and compares per
-/// instruction, their signs gathered by `movemask`. Each word of the set
-/// is built in a register and stored once (OR-ing every quad into memory
-/// made the loop wait on its own stores).
+/// instruction, their signs gathered by `movemask`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn detours_within_avx2<const W: usize>(row_a: &[f64], row_b: &[f64], within: f64) -> NodeSet<W> {
@@ -756,61 +777,36 @@ fn detours_within_avx2<const W: usize>(row_a: &[f64], row_b: &[f64], within: f64
         _CMP_LE_OQ, _mm256_add_pd, _mm256_cmp_pd, _mm256_loadu_pd, _mm256_movemask_pd, _mm256_set1_pd,
     };
     let limit = _mm256_set1_pd(within);
-    let mut set = NodeSet::EMPTY;
-    let len = row_a.len().min(row_b.len()).min(64 * W);
-    for (word, bits_out) in set.0.iter_mut().enumerate() {
-        let base = 64 * word;
-        let end = len.min(base + 64);
-        let mut bits = 0u64;
-        let mut k = base;
-        while k + 4 <= end {
-            // SAFETY: k + 3 < len ≤ the length of both rows.
-            let (xa, xb) = unsafe {
-                (
-                    _mm256_loadu_pd(row_a.as_ptr().add(k)),
-                    _mm256_loadu_pd(row_b.as_ptr().add(k)),
-                )
-            };
-            let quad = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_add_pd(xa, xb), limit)) as u64;
-            bits |= quad << (k - base);
-            k += 4;
-        }
-        *bits_out = bits;
-    }
-    set
+    node_set_by_steps(row_a.len().min(row_b.len()), 4, |k| {
+        // SAFETY: k + 3 < the length of both rows.
+        let (xa, xb) = unsafe {
+            (
+                _mm256_loadu_pd(row_a.as_ptr().add(k)),
+                _mm256_loadu_pd(row_b.as_ptr().add(k)),
+            )
+        };
+        _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_add_pd(xa, xb), limit)) as u64
+    })
 }
 
 /// [`detours_within_rows`] with AVX-512: eight sums and compares per
-/// instruction straight into a mask; each word of the set is built in a
-/// register and stored once.
+/// instruction straight into a mask.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 fn detours_within_avx512<const W: usize>(row_a: &[f64], row_b: &[f64], within: f64) -> NodeSet<W> {
     use core::arch::x86_64::{_CMP_LE_OQ, _mm512_add_pd, _mm512_cmp_pd_mask, _mm512_loadu_pd, _mm512_set1_pd};
     let limit = _mm512_set1_pd(within);
-    let mut set = NodeSet::EMPTY;
     // Rows come in whole scan blocks (16 entries), so in whole octets.
-    let len = row_a.len().min(row_b.len()).min(64 * W);
-    for (word, bits_out) in set.0.iter_mut().enumerate() {
-        let base = 64 * word;
-        let end = len.min(base + 64);
-        let mut bits = 0u64;
-        let mut k = base;
-        while k + 8 <= end {
-            // SAFETY: k + 7 < len ≤ the length of both rows.
-            let (xa, xb) = unsafe {
-                (
-                    _mm512_loadu_pd(row_a.as_ptr().add(k)),
-                    _mm512_loadu_pd(row_b.as_ptr().add(k)),
-                )
-            };
-            let octet = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_add_pd(xa, xb), limit) as u64;
-            bits |= octet << (k - base);
-            k += 8;
-        }
-        *bits_out = bits;
-    }
-    set
+    node_set_by_steps(row_a.len().min(row_b.len()), 8, |k| {
+        // SAFETY: k + 7 < the length of both rows.
+        let (xa, xb) = unsafe {
+            (
+                _mm512_loadu_pd(row_a.as_ptr().add(k)),
+                _mm512_loadu_pd(row_b.as_ptr().add(k)),
+            )
+        };
+        u64::from(_mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_add_pd(xa, xb), limit))
+    })
 }
 
 /// `x` rounded up to `f32`: the least `f32` ≥ x (+∞ above `f32::MAX`).
