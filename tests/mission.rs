@@ -60,6 +60,16 @@ fn try_lockstep_mission(
     Ok((report, log, p))
 }
 
+/// The waypoints a report says the vehicle travelled through.
+fn route_of(report: &serde_json::Value) -> Vec<u64> {
+    report["route"]
+        .as_array()
+        .expect("a route")
+        .iter()
+        .map(|v| v.as_u64().expect("a node id"))
+        .collect()
+}
+
 /// Runs a lockstep mission that must succeed; returns (report, mission.log bytes, prefix).
 fn lockstep_mission(seed: u64, planner_seed: u64, nodes: u32, extra: &[&str]) -> Finished {
     try_lockstep_mission(seed, planner_seed, nodes, extra)
@@ -73,12 +83,7 @@ fn lockstep_mission_reaches_the_goal_feasibly_without_steady_state_allocations()
     assert_eq!(r["goal_reached"], true, "{r:#}");
     let used = r["time_used_s"].as_f64().unwrap();
     assert!(used > 0.0 && used <= r["time_available_s"].as_f64().unwrap(), "{r:#}");
-    let route: Vec<u64> = r["route"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_u64().unwrap())
-        .collect();
+    let route = route_of(&r);
     assert_eq!(route.first(), Some(&0));
     assert_eq!(route.last(), Some(&11));
     // Every edge travelled completed its task, and no waypoint twice.
@@ -107,6 +112,27 @@ fn lockstep_mission_reaches_the_goal_feasibly_without_steady_state_allocations()
     }
     assert_eq!(r["shm_files_left"], 0);
     assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+}
+
+#[test]
+fn missions_beyond_128_waypoints_run_in_the_larger_classes_without_steady_state_allocations() {
+    let _shared = shared();
+    // 200 waypoints: the 256 class; 300: the 512 class. The snapshots carry
+    // every edge as a slice, the plans and states u16 ids.
+    for nodes in [200u32, 300] {
+        let (r, _, p) = lockstep_mission(2, 1, nodes, &[]);
+        assert_eq!(r["goal_reached"], true, "{nodes}: {r:#}");
+        let route = route_of(&r);
+        assert_eq!(route.first(), Some(&0));
+        assert_eq!(route.last(), Some(&(u64::from(nodes) - 1)), "{nodes}: ends at the goal");
+        assert_eq!(r["tasks_completed"].as_u64().unwrap() as usize, route.len() - 1);
+        assert_eq!(r["rejected_messages"], 0, "{nodes}: {r:#}");
+        let a = &r["allocations"];
+        assert_eq!(a["steady_state_measured"], true, "{nodes}: {a:#}");
+        assert_eq!(r["steady_state_allocations"], 0, "{nodes}: {a:#}");
+        assert_eq!(r["shm_files_left"], 0);
+        assert!(leftovers(&p).is_empty(), "{:?}", leftovers(&p));
+    }
 }
 
 #[test]

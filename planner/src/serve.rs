@@ -7,8 +7,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use crate::mission::log::with_log_writer;
+use auv_core::capacity::Class;
 use auv_core::solver::{Algorithm, Solver};
-use auv_messages::msg::{CommandAck, OperatorCommand, Plan, PlannerStatus, VehicleState, WaypointSnapshot};
+use auv_messages::msg::{CommandAck, OperatorCommand, Plan, PlannerStatus, VehicleState};
 use auv_messages::wire::{FaultCycle, PLAN_FAULTS, WireRules};
 use auv_platform::signal;
 use auv_service::alloc;
@@ -16,7 +17,7 @@ use auv_service::core::{PlannerCore, ServiceConfig, ServiceEvent};
 use auv_service::plan_out::FaultyPlans;
 use auv_service::run::{ExitReason, PlannerPorts, run_service};
 use auv_transport::guard::Guarded;
-use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
+use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcSnapshotInbox, IpcWaker, Shm, Stamp};
 use auv_transport::{IpcArgs, Role, SetupError, TransportError};
 use auv_world::load::{MissionWorld, ScenarioArgs, WorldError, load_world};
 
@@ -189,8 +190,8 @@ impl ServiceArgs {
                 self.drift_allowance
             )));
         }
-        // A service world holds at most MAX_NODES waypoints (checked when loaded).
-        let mut arrival_allowance_s = [0.0; auv_core::problem::MAX_NODES];
+        // A service world holds at most MAX_WIRE_NODES waypoints (checked when loaded).
+        let mut arrival_allowance_s = [0.0; auv_messages::msg::MAX_WIRE_NODES];
         for (a, w) in arrival_allowance_s.iter_mut().zip(world.arrival_allowances_s()) {
             *a = w * self.drift_allowance;
         }
@@ -221,7 +222,7 @@ impl ServiceArgs {
 /// PSO (150 particles, inertia schedule over the paper's 150 iterations) or
 /// BBO. The iteration budget per re-plan comes from the service
 /// configuration (default 150), cut at the deadline.
-pub fn make_solver(algorithm: Algorithm) -> Box<dyn Solver> {
+pub fn make_solver<const W: usize>(algorithm: Algorithm) -> Box<dyn Solver<W>> {
     algorithm.build(algorithm.paper_iterations())
 }
 
@@ -229,7 +230,7 @@ pub fn make_solver(algorithm: Algorithm) -> Box<dyn Solver> {
 pub type ShmPlannerPorts = PlannerPorts<
     IpcWaker<Shm>,
     IpcInbox<Shm, VehicleState>,
-    IpcInbox<Shm, WaypointSnapshot>,
+    IpcSnapshotInbox<Shm>,
     FaultyPlans<IpcOutbox<Shm, Plan>>,
     IpcOutbox<Shm, PlannerStatus>,
     IpcInbox<Shm, OperatorCommand>,
@@ -249,8 +250,7 @@ pub fn open_ports(
     Ok(PlannerPorts {
         waker: ctx.waker(Role::Planner)?,
         states: Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "planner").with_check(rules.state_check()),
-        snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "planner")
-            .with_check(rules.snapshot_check()),
+        snapshots: Guarded::new(ctx.snapshot_inbox()?, fingerprint, "planner").with_check(rules.snapshot_check()),
         plans: FaultyPlans::new(ctx.outbox::<Plan>(stamp)?, inject_plans),
         status: ctx.outbox::<PlannerStatus>(stamp)?,
         commands: Guarded::new(ctx.inbox::<OperatorCommand>()?, fingerprint, "planner"),
@@ -321,22 +321,31 @@ fn serve(args: &ServeArgs) -> Result<ExitReason, ServeError> {
     let rules = Arc::new(WireRules::new(&world));
     let cfg = args.service.config(&world, args.lockstep)?;
     let plan_faults = args.service.plan_faults()?;
+    // The solver's buffers are sized for the mission: the smallest class
+    // that holds its waypoints (a 40-node mission runs on 64-node tables).
+    let class = Class::for_nodes(world.world().n()).map_err(|e| ServeError::Usage(e.to_string()))?;
     drop(world);
     let opts = args.ipc.options()?;
     let rt_priority = prepare_service_thread(args.service.rt_priority, !args.ipc.spin && !args.lockstep)?;
     let ctx = IpcContext::<Shm>::new(&opts, "planner")?;
     let mut ports = open_ports(&ctx, fingerprint, &rules, plan_faults)?;
-    let mut core = PlannerCore::new(cfg, make_solver(cfg.algorithm));
+    let log = args.log.as_deref();
+    auv_core::with_class!(class, W => serve_in::<W>(cfg, rt_priority, log, &mut ports))
+}
+
+/// The service loop on a core of the class of `W` words.
+fn serve_in<const W: usize>(
+    cfg: ServiceConfig,
+    rt_priority: Option<i32>,
+    log: Option<&Path>,
+    ports: &mut ShmPlannerPorts,
+) -> Result<ExitReason, ServeError> {
+    let mut core = PlannerCore::<W>::new(cfg, make_solver(cfg.algorithm));
     core.set_rt_priority(rt_priority);
-    let exit = with_log_writer(args.log.as_deref(), |events: &mut dyn FnMut(&ServiceEvent)| {
-        run_service(&mut core, &mut ports, events, &mut |_| true)
+    let exit = with_log_writer(log, |events: &mut dyn FnMut(&ServiceEvent)| {
+        run_service(&mut core, ports, events, &mut |_| true)
     })
-    .map_err(|e| {
-        ServeError::Log(format!(
-            "{}: {e}",
-            args.log.as_deref().unwrap_or(Path::new("")).display()
-        ))
-    })??;
+    .map_err(|e| ServeError::Log(format!("{}: {e}", log.unwrap_or(Path::new("")).display())))??;
     let c = core.counters();
     let a = alloc::counters();
     let h = core.latency_us();
@@ -485,10 +494,13 @@ mod tests {
         assert_eq!(default.algorithm, Algorithm::Auto);
         let cfg = default.config(&world, false).unwrap();
         assert_eq!(cfg.algorithm, Algorithm::Auto);
-        assert_eq!(make_solver(cfg.algorithm).name(), "auto");
+        assert_eq!(make_solver::<2>(cfg.algorithm).name(), "auto");
         for (flag, name) in [("pso", "pso"), ("bbo", "bbo"), ("auto", "auto")] {
             let args = Cli::try_parse_from(["x", "--algorithm", flag]).unwrap().service;
-            assert_eq!(make_solver(args.config(&world, true).unwrap().algorithm).name(), name);
+            assert_eq!(
+                make_solver::<2>(args.config(&world, true).unwrap().algorithm).name(),
+                name
+            );
         }
         assert!(Cli::try_parse_from(["x", "--algorithm", "exact"]).is_err());
     }

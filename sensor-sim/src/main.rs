@@ -31,7 +31,7 @@ use auv_platform::clock::mono_now_ns;
 use auv_platform::signal;
 use auv_transport::faulty::{Corrupt, FaultyOutbox};
 use auv_transport::guard::Guarded;
-use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
+use auv_transport::ipc::{IpcContext, IpcInbox, IpcSnapshotOutbox, IpcWaker, Shm, Stamp};
 use auv_transport::{IpcArgs, Outbox, Role, Wake, Waker};
 use auv_world::load::{MissionWorld, ScenarioArgs, load_world};
 use clap::Parser;
@@ -103,7 +103,7 @@ impl VehicleClock {
 }
 
 /// The outbox of snapshots: bad ones next to the good under `--inject`.
-type SnapshotOut = FaultyOutbox<IpcOutbox<Shm, WaypointSnapshot>, BadSnapshot>;
+type SnapshotOut = FaultyOutbox<IpcSnapshotOutbox<Shm>, BadSnapshot>;
 
 /// Makes an injected snapshot bad (see [`corrupt_snapshot`]).
 struct BadSnapshot {
@@ -157,7 +157,8 @@ fn run(args: &Args) -> Result<Outcome, Error> {
         rules: rules.clone(),
         period_s: period,
     };
-    let mut out = FaultyOutbox::new(ctx.outbox::<WaypointSnapshot>(Stamp::new(fingerprint))?, faults, bad);
+    let out_box = ctx.snapshot_outbox(Stamp::new(fingerprint), world.world().n())?;
+    let mut out = FaultyOutbox::new(out_box, faults, bad);
     let mut states =
         Guarded::new(ctx.inbox::<VehicleState>()?, fingerprint, "sensor-sim").with_check(rules.state_check());
     let mut waker = ctx.waker(Role::Sensor)?;

@@ -33,7 +33,7 @@ use auv_platform::clock::mono_now_ns;
 use auv_platform::signal;
 use auv_transport::faulty::{Corrupt, FaultyOutbox};
 use auv_transport::guard::Guarded;
-use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcWaker, Shm, Stamp};
+use auv_transport::ipc::{IpcContext, IpcInbox, IpcOutbox, IpcSnapshotInbox, IpcWaker, Shm, Stamp};
 use auv_transport::{IpcArgs, Outbox, Role, Wake, Waker};
 use auv_world::load::{ScenarioArgs, load_world};
 use clap::Parser;
@@ -110,7 +110,7 @@ struct Ports {
     waker: IpcWaker<S>,
     /// Bad states next to the good under `--inject`.
     state: FaultyOutbox<IpcOutbox<S, VehicleState>, BadState>,
-    snapshots: Guarded<WaypointSnapshot, IpcInbox<S, WaypointSnapshot>>,
+    snapshots: Guarded<WaypointSnapshot, IpcSnapshotInbox<S>>,
     plans: Guarded<Plan, IpcInbox<S, Plan>>,
     status: Guarded<PlannerStatus, IpcInbox<S, PlannerStatus>>,
 }
@@ -143,7 +143,7 @@ impl Ports {
         Ok(Self {
             waker: ctx.waker(Role::Vehicle)?,
             state: FaultyOutbox::new(ctx.outbox::<VehicleState>(stamp)?, faults, BadState { n }),
-            snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fingerprint, "vehicle-sim"),
+            snapshots: Guarded::new(ctx.snapshot_inbox()?, fingerprint, "vehicle-sim"),
             plans: Guarded::new(ctx.inbox::<Plan>()?, fingerprint, "vehicle-sim"),
             status: Guarded::new(ctx.inbox::<PlannerStatus>()?, fingerprint, "vehicle-sim"),
         })
@@ -551,7 +551,7 @@ mod tests {
         let fp = 9;
         let ports = Ports::open(&ctx, Stamp::new(fp), FaultCycle::NONE, 4).unwrap();
         let mut v = Vehicle::new(ports, 0.0, None);
-        let mut sensor = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();
+        let mut sensor = ctx.snapshot_outbox(Stamp::new(fp), 4).unwrap();
         let mut planner = ctx.outbox::<Plan>(Stamp::new(fp)).unwrap();
         // Epoch 0 lacks the edge 1 - 2; epoch 1 has it.
         let full = line_instance();

@@ -15,14 +15,20 @@
 //! at the same mission times give bit-identical trajectories, whatever the
 //! wall-clock pacing.
 
+use auv_core::capacity::{LARGEST_WORDS, NodeSet as ClassNodeSet};
 use auv_core::instance::distance_3d_m as dist;
-use auv_core::problem::{MAX_NODES, NodeSet};
-use auv_core::route::Route;
+use auv_core::route::Route as ClassRoute;
 use auv_messages::journal::Resume;
 use auv_messages::msg::{
-    Outcome, Plan, RejectKind, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, boxed_zeroed, route_ids,
+    MAX_WIRE_NODES, Outcome, Plan, RejectKind, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, route_ids,
 };
-use auv_messages::network::{copy_snapshot, find_edge};
+use auv_messages::network::find_edge;
+
+/// A route of the vehicle: any network the messages carry (the largest class).
+pub type Route = ClassRoute<LARGEST_WORDS>;
+
+/// A set of waypoints of any network the messages carry.
+type NodeSet = ClassNodeSet<LARGEST_WORDS>;
 
 /// What happened in a step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,7 +68,7 @@ pub enum PlanOffer {
 
 /// The simulated vehicle.
 pub struct VehicleSim {
-    net: Box<WaypointSnapshot>,
+    net: WaypointSnapshot,
     have_net: bool,
     t: f64,
     pos: [f64; 3],
@@ -103,7 +109,7 @@ impl VehicleSim {
     /// A vehicle that knows no network yet.
     pub fn new() -> Self {
         Self {
-            net: boxed_zeroed(),
+            net: WaypointSnapshot::new(),
             have_net: false,
             t: 0.0,
             pos: [0.0; 3],
@@ -131,7 +137,10 @@ impl VehicleSim {
 
     /// Applies a validated snapshot. The first one places the vehicle at the start.
     pub fn apply_snapshot(&mut self, s: &WaypointSnapshot) {
-        copy_snapshot(s, &mut self.net);
+        if self.net.copy_snapshot(s).is_err() {
+            // Cannot happen: both buffers hold the largest network.
+            return;
+        }
         if !self.have_net {
             self.have_net = true;
             let start = s.start as usize;
@@ -212,11 +221,11 @@ impl VehicleSim {
         verdict
     }
 
-    fn check_plan(&self, ids: &[u8]) -> Result<PlanOffer, RejectKind> {
+    fn check_plan(&self, ids: &[u16]) -> Result<PlanOffer, RejectKind> {
         if !self.have_net {
             return Err(RejectKind::BadPlan);
         }
-        let n = (self.net.node_count as usize).min(MAX_NODES);
+        let n = (self.net.node_count as usize).min(MAX_WIRE_NODES);
         if ids.iter().any(|&id| id as usize >= n) {
             return Err(RejectKind::NodeOutOfRange);
         }
@@ -369,7 +378,7 @@ impl VehicleSim {
     /// plan still passes through here.
     pub fn resume(&mut self, r: &Resume) {
         let Some(&here) = r.route.last() else { return };
-        let n = (self.net.node_count as usize).min(MAX_NODES);
+        let n = (self.net.node_count as usize).min(MAX_WIRE_NODES);
         if !self.have_net || here >= n || r.route.iter().any(|&i| i >= n) {
             return;
         }
@@ -479,10 +488,8 @@ impl VehicleSim {
         m.needs_answer = u32::from(needs_answer);
         m.stale_plans = self.stale_plans;
         m.route_len = self.route.len() as u32;
-        // Routes here are of the 128-node class: every id fits a byte.
-        for (slot, &id) in m.route.iter_mut().zip(self.route.ids()) {
-            *slot = id as u8;
-        }
+        let ids = self.route.ids();
+        m.route[..ids.len()].copy_from_slice(ids);
     }
 
     /// What the vehicle is doing.
@@ -513,13 +520,13 @@ impl VehicleSim {
 mod tests {
     use super::*;
     use auv_core::fixtures::line_instance;
-    use auv_messages::msg::plan_through;
+    use auv_messages::msg::{boxed_zeroed, plan_through};
     use auv_messages::network::write_snapshot;
 
-    fn net() -> Box<WaypointSnapshot> {
+    fn net() -> WaypointSnapshot {
         // 0 - 1 - 2 - 3 on a line 100 m apart (+ shortcut 0 - 3), 1 m/s,
         // tasks 10 s, budget 1000 s.
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+        let mut s = WaypointSnapshot::new();
         write_snapshot(&line_instance(), 0, &mut s).unwrap();
         s
     }

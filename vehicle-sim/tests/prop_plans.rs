@@ -26,14 +26,14 @@ proptest! {
         n in 3usize..20,
         density in 0.2f64..1.0,
         offers in proptest::collection::vec(
-            (proptest::collection::vec(0u8..24, 0..10), any::<bool>(), 0.0f64..3000.0),
+            (proptest::collection::vec(0u16..24, 0..10), any::<bool>(), 0.0f64..3000.0),
             1..10,
         ),
     ) {
         let inst = random_instance(n, density, 20_000.0, seed);
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+        let mut s = WaypointSnapshot::new();
         write_snapshot(&inst, 0, &mut s).unwrap();
-        let goal = s.goal as u8;
+        let goal = s.goal as u16;
         let mut v = VehicleSim::new();
         v.apply_snapshot(&s);
         let mut t = 0.0;
@@ -44,7 +44,7 @@ proptest! {
             // goal, so some of them fit; the rest are anything at all.
             let mut route = ids;
             if anchored {
-                route.insert(0, before.to_node as u8);
+                route.insert(0, before.to_node as u16);
                 route.push(goal);
             }
             match v.offer_plan(&plan_through(&route, k as u64 + 1)) {
@@ -59,7 +59,7 @@ proptest! {
                     );
                 }
                 Ok(PlanOffer::Taken) => {
-                    prop_assert_eq!(route.first().copied(), Some(before.to_node as u8));
+                    prop_assert_eq!(route.first().copied(), Some(before.to_node as u16));
                     prop_assert_eq!(route.last().copied(), Some(goal));
                     for w in route.windows(2) {
                         prop_assert!(find_edge(&s, w[0] as usize, w[1] as usize).is_some(), "non-edge {:?} taken", w);

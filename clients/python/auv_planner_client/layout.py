@@ -13,6 +13,7 @@ from . import transport as t
 
 _SCALARS = {
     ctypes.c_uint8: "u8",
+    ctypes.c_uint16: "u16",
     ctypes.c_uint32: "u32",
     ctypes.c_uint64: "u64",
     ctypes.c_double: "f64",
@@ -70,7 +71,7 @@ def check(layout, structs=None, messages=None):
         for cls, w in zip(classes, want):
             _check_struct(cls, w, problems)
     consts = layout["constants"]
-    for k in ("MAX_NODES", "MAX_EDGES", "REJECT_KINDS", "NO_NODE"):
+    for k in ("MAX_WIRE_NODES", "MAX_WIRE_EDGES", "REJECT_KINDS", "NO_NODE"):
         if getattr(m, k) != consts[k]:
             problems.append("constant %s = %s, Rust has %s" % (k, getattr(m, k), consts[k]))
     for enum, codes in layout["enums"].items():
@@ -81,6 +82,7 @@ def check(layout, structs=None, messages=None):
     for topic, w in zip(t.TOPICS, layout["topics"]):
         mine = {
             "leaf": topic.leaf,
+            "payload": "slice" if topic.user_header is not None else "struct",
             "type_name": topic.cls.type_name(),
             "event_id": topic.event_id,
             "consumers": list(topic.consumers),
@@ -93,9 +95,15 @@ def check(layout, structs=None, messages=None):
                 "max_subscribers": topic.max_subscribers,
             },
         }
+        head = topic.user_header
+        mine["user_header"] = {
+            "type_name": head.type_name() if head is not None else "()",
+            "size": ctypes.sizeof(head) if head is not None else 0,
+            "align": ctypes.alignment(head) if head is not None else 1,
+        }
         for k, v in mine.items():
-            if w[k] != v:
-                problems.append("topic %s: %s = %s, Rust has %s" % (topic.leaf, k, v, w[k]))
+            if w.get(k) != v:
+                problems.append("topic %s: %s = %s, Rust has %s" % (topic.leaf, k, v, w.get(k)))
     wake = layout["wake"]
     mine = {
         "roles": list(t.ROLES),

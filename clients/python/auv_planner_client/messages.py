@@ -6,14 +6,20 @@ the Rust ``#[type_name]``: iceoryx2 connects two sides only when the type
 name, size and alignment agree. ``tests/test_layout.py`` compares every class
 here with ``planner wire-layout`` and fails on any drift.
 
+A waypoint snapshot travels as an iceoryx2 slice of ``WireEdge`` behind a
+``SnapshotHead`` user header (so its size follows the network's); in Python
+the two are held together by ``WaypointSnapshot``.
+
 Units: m, s, m/s, ns; x east, y north, z depth (positive down).
 """
 
 import ctypes
-from ctypes import c_double, c_uint8, c_uint32, c_uint64
+from ctypes import c_double, c_uint16, c_uint32, c_uint64
 
-MAX_NODES = 128
-MAX_EDGES = MAX_NODES * (MAX_NODES - 1) // 2
+#: Most waypoints a message names (the planner's largest capacity class).
+MAX_WIRE_NODES = 512
+#: Most edges a snapshot carries: every pair of MAX_WIRE_NODES waypoints.
+MAX_WIRE_EDGES = MAX_WIRE_NODES * (MAX_WIRE_NODES - 1) // 2
 REJECT_KINDS = 12
 NO_NODE = 0xFFFF_FFFF
 
@@ -37,7 +43,7 @@ class WireNode(ctypes.Structure):
 
 
 class WireEdge(ctypes.Structure):
-    """An edge that exists now, with its task."""
+    """An edge that exists now, with its task: the element of a snapshot's slice."""
 
     _fields_ = [
         ("a", c_uint32),
@@ -46,6 +52,10 @@ class WireEdge(ctypes.Structure):
         ("risk", c_double),
         ("task_time_s", c_double),
     ]
+
+    @staticmethod
+    def type_name():
+        return "auv.WireEdge.v1"
 
 
 class AllocCounters(ctypes.Structure):
@@ -63,8 +73,9 @@ class AllocCounters(ctypes.Structure):
     ]
 
 
-class WaypointSnapshot(ctypes.Structure):
-    """sensor -> planner, vehicle: the whole network as the sensor sees it now."""
+class SnapshotHead(ctypes.Structure):
+    """sensor -> planner, vehicle: the fixed part of a snapshot (the sample's
+    user header); its ``edge_count`` edges are the sample's payload slice."""
 
     _fields_ = [
         ("header", Header),
@@ -80,13 +91,42 @@ class WaypointSnapshot(ctypes.Structure):
         ("start", c_uint32),
         ("goal", c_uint32),
         ("_pad", c_uint32),
-        ("nodes", WireNode * MAX_NODES),
-        ("edges", WireEdge * MAX_EDGES),
+        ("nodes", WireNode * MAX_WIRE_NODES),
     ]
 
     @staticmethod
     def type_name():
-        return "auv.WaypointSnapshot.v1"
+        return "auv.WaypointSnapshot.v2"
+
+
+class WaypointSnapshot:
+    """A snapshot held in Python: its ``head`` (a ``SnapshotHead``) and its
+    ``edges`` (a ctypes array of ``WireEdge``; the first ``edge_count`` are
+    in use). The head's fields read and write through the snapshot itself
+    (``s.epoch``, ``s.nodes[i]``), as on the Rust side."""
+
+    __slots__ = ("head", "edges")
+
+    def __init__(self, head=None, edges=None, max_edges=MAX_WIRE_EDGES):
+        object.__setattr__(self, "head", head if head is not None else SnapshotHead())
+        object.__setattr__(self, "edges", edges if edges is not None else (WireEdge * max_edges)())
+
+    def __getattr__(self, name):
+        return getattr(self.head, name)
+
+    def __setattr__(self, name, value):
+        if name in WaypointSnapshot.__slots__:
+            object.__setattr__(self, name, value)
+        else:
+            setattr(self.head, name, value)
+
+    @staticmethod
+    def type_name():
+        return SnapshotHead.type_name()
+
+    def edges_in_use(self):
+        """The first ``edge_count`` edges (as many as the array holds)."""
+        return self.edges[: min(int(self.head.edge_count), len(self.edges))]
 
 
 class VehicleState(ctypes.Structure):
@@ -113,12 +153,12 @@ class VehicleState(ctypes.Structure):
         ("stale_plans", c_uint32),
         ("route_len", c_uint32),
         ("rejected", c_uint64 * REJECT_KINDS),
-        ("route", c_uint8 * MAX_NODES),
+        ("route", c_uint16 * MAX_WIRE_NODES),
     ]
 
     @staticmethod
     def type_name():
-        return "auv.VehicleState.v2"
+        return "auv.VehicleState.v3"
 
 
 class Plan(ctypes.Structure):
@@ -144,12 +184,12 @@ class Plan(ctypes.Structure):
         ("replan", c_uint32),
         ("route_len", c_uint32),
         ("_pad", c_uint32),
-        ("route", c_uint8 * MAX_NODES),
+        ("route", c_uint16 * MAX_WIRE_NODES),
     ]
 
     @staticmethod
     def type_name():
-        return "auv.Plan.v2"
+        return "auv.Plan.v3"
 
 
 class PlannerStatus(ctypes.Structure):
@@ -225,9 +265,9 @@ class CommandAck(ctypes.Structure):
 
 
 #: Nested structs, as ``planner wire-layout`` lists them under "structs".
-STRUCTS = [Header, WireNode, WireEdge, AllocCounters]
+STRUCTS = [Header, WireNode, AllocCounters]
 #: Messages, as ``planner wire-layout`` lists them under "messages".
-MESSAGES = [WaypointSnapshot, VehicleState, Plan, PlannerStatus, OperatorCommand, CommandAck]
+MESSAGES = [SnapshotHead, WireEdge, VehicleState, Plan, PlannerStatus, OperatorCommand, CommandAck]
 
 
 class ObjectiveCode:
@@ -348,5 +388,5 @@ def copy_of(cls, address):
 
 def route_of(msg):
     """The route of a plan or vehicle state as a list of node ids (length checked against capacity)."""
-    n = min(int(msg.route_len), MAX_NODES)
+    n = min(int(msg.route_len), MAX_WIRE_NODES)
     return list(msg.route[:n])

@@ -10,8 +10,13 @@ the topic's event id, so a consumer blocks on one listener whatever it reads.
 
 Services are opened with ``open_or_create`` and the Rust QoS, so a client
 may start before or after the mission's processes.
+
+The waypoints topic is the one whose samples vary in size: a slice of
+``WireEdge`` behind a ``SnapshotHead`` user header. Its inbox hands out
+``messages.WaypointSnapshot`` objects; its outbox sends one.
 """
 
+import ctypes
 import os
 import time
 
@@ -21,10 +26,12 @@ from . import messages as m
 
 
 class Topic:
-    """One topic: its message class, service leaf, event id, consumers and QoS."""
+    """One topic: its payload class (the slice's element when ``user_header``
+    is given), service leaf, event id, consumers and QoS."""
 
-    def __init__(self, cls, leaf, event_id, consumers, history_size, subscriber_max_buffer_size):
+    def __init__(self, cls, leaf, event_id, consumers, history_size, subscriber_max_buffer_size, user_header=None):
         self.cls = cls
+        self.user_header = user_header
         self.leaf = leaf
         self.event_id = event_id
         self.consumers = consumers
@@ -44,10 +51,10 @@ WAKE_MAX_LISTENERS = 4
 
 ROLES = ("planner", "vehicle", "sensor")
 
-WAYPOINTS = Topic(m.WaypointSnapshot, "sensor/waypoints/v1", 1, ("planner", "vehicle"), 1, 2)
-VEHICLE_STATE = Topic(m.VehicleState, "vehicle/state/v2", 2, ("planner", "sensor"), 1, 2)
+WAYPOINTS = Topic(m.WireEdge, "sensor/waypoints/v2", 1, ("planner", "vehicle"), 1, 2, user_header=m.SnapshotHead)
+VEHICLE_STATE = Topic(m.VehicleState, "vehicle/state/v3", 2, ("planner", "sensor"), 1, 2)
 # Plans queue deep: an observer counting them must not lose one in a burst.
-PLAN = Topic(m.Plan, "planner/plan/v2", 3, ("vehicle",), 0, 64)
+PLAN = Topic(m.Plan, "planner/plan/v3", 3, ("vehicle",), 0, 64)
 STATUS = Topic(m.PlannerStatus, "planner/status/v4", 4, ("vehicle",), 1, 2)
 # Operator commands (from the shore link) and their acks: never replayed,
 # each one matters. Acks wake no role: the shore link polls them.
@@ -98,22 +105,37 @@ class Stamp:
 
 
 class Outbox:
-    """Publishes one topic and wakes its consumers."""
+    """Publishes one topic and wakes its consumers. On the waypoints topic
+    the samples hold the edges of a network of up to ``max_nodes`` waypoints."""
 
-    def __init__(self, client, topic):
+    def __init__(self, client, topic, max_nodes=128):
         self.topic = topic
         self._service = client._pubsub(topic)
         try:
-            self._publisher = self._service.publisher_builder().max_loaned_samples(1).create()
+            builder = self._service.publisher_builder().max_loaned_samples(1)
+            if topic.user_header is not None:
+                builder = builder.initial_max_slice_len(max(1, max_nodes * (max_nodes - 1) // 2))
+            self._publisher = builder.create()
         except Exception as e:  # iceoryx2 raises its own exception classes
             raise ClientError("create publisher on %s: %r" % (topic.leaf, e)) from e
         self._notifiers = [client._notifier(role) for role in topic.consumers]
         self._event = iox2.EventId.new(topic.event_id)
 
     def send(self, msg):
-        """Sends ``msg`` (a ctypes instance of the topic's class) as it is and wakes the consumers."""
-        sample = self._publisher.loan_uninit()
-        sample = sample.write_payload(msg)
+        """Sends ``msg`` as it is and wakes the consumers: a ctypes instance of
+        the topic's class, or on the waypoints topic a ``WaypointSnapshot``
+        (its head, and its first ``edge_count`` edges as the slice)."""
+        if self.topic.user_header is not None:
+            edges = msg.edges_in_use()
+            sample = self._publisher.loan_slice_uninit(len(edges))
+            ctypes.memmove(sample.user_header_ptr, ctypes.byref(msg.head), ctypes.sizeof(msg.head))
+            if edges:
+                array = (m.WireEdge * len(edges))(*edges)
+                ctypes.memmove(sample.payload_ptr, array, ctypes.sizeof(array))
+            sample = sample.assume_init()
+        else:
+            sample = self._publisher.loan_uninit()
+            sample = sample.write_payload(msg)
         sample.send()
         for n in self._notifiers:
             n.notify_with_custom_event_id(self._event)
@@ -148,7 +170,14 @@ class Inbox:
             sample = self._subscriber.receive()
             if sample is None:
                 return out
-            out.append(m.copy_of(self.topic.cls, sample.payload_ptr))
+            if self.topic.user_header is not None:
+                head = m.copy_of(self.topic.user_header, sample.user_header_ptr)
+                edges = sample.payload()
+                n = edges.len()
+                array = (m.WireEdge * n).from_buffer_copy(ctypes.string_at(edges.as_ptr(), n * ctypes.sizeof(m.WireEdge)))
+                out.append(m.WaypointSnapshot(head, array))
+            else:
+                out.append(m.copy_of(self.topic.cls, sample.payload_ptr))
             sample.delete()
 
 
@@ -199,10 +228,13 @@ class Client:
         if topic.leaf not in self._pubsubs:
             name = self.service_name(topic)
             try:
+                builder = self.node.service_builder(iox2.ServiceName.new(name))
+                if topic.user_header is not None:
+                    builder = builder.publish_subscribe(iox2.Slice[topic.cls]).user_header(topic.user_header)
+                else:
+                    builder = builder.publish_subscribe(topic.cls)
                 svc = (
-                    self.node.service_builder(iox2.ServiceName.new(name))
-                    .publish_subscribe(topic.cls)
-                    .history_size(topic.history_size)
+                    builder.history_size(topic.history_size)
                     .subscriber_max_buffer_size(topic.subscriber_max_buffer_size)
                     .subscriber_max_borrowed_samples(SUBSCRIBER_MAX_BORROWED_SAMPLES)
                     .enable_safe_overflow(ENABLE_SAFE_OVERFLOW)
@@ -240,8 +272,8 @@ class Client:
         except Exception as e:
             raise ClientError("create notifier for %s: %r" % (role, e)) from e
 
-    def outbox(self, topic):
-        return Outbox(self, topic)
+    def outbox(self, topic, max_nodes=128):
+        return Outbox(self, topic, max_nodes)
 
     def inbox(self, topic):
         return Inbox(self, topic)

@@ -57,7 +57,7 @@ def _header(h):
 
 
 def _ids_in_range(ids):
-    if any(i >= m.MAX_NODES for i in ids):
+    if any(i >= m.MAX_WIRE_NODES for i in ids):
         raise Reject("node_out_of_range")
 
 
@@ -70,8 +70,8 @@ def _snapshot(s):
     if s.objective == m.ObjectiveCode.PAPER_COST:
         _at_least(s.phi1, 0.0)
         _at_least(s.phi2, 0.0)
-    n = _count(s.node_count, m.MAX_NODES)
-    k = _count(s.edge_count, m.MAX_EDGES)
+    n = _count(s.node_count, m.MAX_WIRE_NODES)
+    k = _count(s.edge_count, min(m.MAX_WIRE_EDGES, len(s.edges)))
     if n < 2:
         raise Reject("malformed")
     start, goal = _node(s.start, n), _node(s.goal, n)
@@ -99,7 +99,7 @@ def _plan(p):
     for flag in (p.deadline_cut, p.feasible, p.fallback):
         if flag > 1:
             raise Reject("malformed")
-    n = _count(p.route_len, m.MAX_NODES)
+    n = _count(p.route_len, m.MAX_WIRE_NODES)
     if n < 1:
         raise Reject("malformed")
     _ids_in_range(p.route[:n])
@@ -121,9 +121,9 @@ def _state(s):
     _code("VehicleMode", s.mode)
     _code("VehicleEvent", s.event)
     _code("Outcome", s.outcome)
-    _node(s.from_node, m.MAX_NODES)
-    _node(s.to_node, m.MAX_NODES)
-    n = _count(s.route_len, m.MAX_NODES)
+    _node(s.from_node, m.MAX_WIRE_NODES)
+    _node(s.to_node, m.MAX_WIRE_NODES)
+    n = _count(s.route_len, m.MAX_WIRE_NODES)
     if n == 0:
         raise Reject("malformed")
     _ids_in_range(s.route[:n])

@@ -94,12 +94,12 @@ def sweep(pfx):
             pass
 
 
-def python_mission(tmp_path, seed, name, *vehicle_args):
+def python_mission(tmp_path, seed, name, *vehicle_args, nodes=NODES):
     """A lockstep mission with examples/vehicle.py as its vehicle; returns (out dir, vehicle stderr, mission stderr)."""
     out = str(tmp_path / name)
     pfx = prefix("v")
     mission = start_planner(
-        "mission", "--quiet", "--lockstep", "--seed", str(seed), "--nodes", NODES,
+        "mission", "--quiet", "--lockstep", "--seed", str(seed), "--nodes", nodes,
         "--external-vehicle", "--ipc-prefix", pfx, "--out", out,
     )
     # The mission names the journal's path once it has cleared the old one.
@@ -108,9 +108,15 @@ def python_mission(tmp_path, seed, name, *vehicle_args):
     journal = os.path.join(out, "journal.jsonl")
     vehicle = example("vehicle.py", "--ipc-prefix", pfx, "--journal", journal, *vehicle_args)
     v_code, _, v_err = finish(vehicle, "vehicle.py")
+    if v_code != 0:
+        # The mission would wait for its vehicle until the watchdog: stop it
+        # and report the vehicle's own error.
+        mission.kill()
+        mission.communicate()
+        sweep(pfx)
+        pytest.fail("vehicle.py exited %s:\n%s" % (v_code, v_err))
     m_code, _, m_err = finish(mission, "planner mission")
     sweep(pfx)
-    assert v_code == 0, v_err
     assert m_code == 0, m_err
     return out, v_err, m_err
 

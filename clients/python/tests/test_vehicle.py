@@ -39,6 +39,18 @@ def test_the_python_vehicle_reaches_the_goal_deterministically_as_vehicle_sim_do
     assert read_json(os.path.join(rust, "report.json"))["route"] == r["route"]
 
 
+def test_beyond_128_waypoints_the_python_vehicle_flies_the_mission_vehicle_sim_flies(tmp_path):
+    # 200 waypoints: snapshots of ~18 000 edges as slices, u16 route ids.
+    a, _, _ = python_mission(tmp_path, 2, "py200", nodes="200")
+    r = read_json(os.path.join(a, "report.json"))
+    assert r["outcome"] == "goal_reached", r
+    assert r["rejected_messages"] == 0, r
+    assert r["route"][-1] == 199
+    rust = rust_mission(tmp_path, 2, "rust200", nodes="200")
+    for f in ("mission.log", "journal.jsonl"):
+        assert read(os.path.join(a, f)) == read(os.path.join(rust, f)), "%s differs from vehicle-sim's" % f
+
+
 def test_bad_arguments_are_one_line_errors(tmp_path):
     for args, needle in (
         (["--ipc-prefix", "has space"], "invalid ipc prefix"),

@@ -49,6 +49,17 @@ impl<const W: usize> Route<W> {
         Some(r)
     }
 
+    /// The same route in the class of `V` words; `None` when it does not fit.
+    pub fn to_class<const V: usize>(&self) -> Option<Route<V>> {
+        if self.len > Route::<V>::CAPACITY || self.ids().iter().any(|&id| id as usize >= Route::<V>::CAPACITY) {
+            return None;
+        }
+        let mut r = Route::<V>::new();
+        r.nodes[..self.len].copy_from_slice(self.ids());
+        r.len = self.len;
+        Some(r)
+    }
+
     /// Appends `id` (caller keeps len within the class, which a simple path does).
     #[inline]
     pub fn push(&mut self, id: usize) {

@@ -33,9 +33,7 @@ use super::encode::{self, Ack, Command, Event, Heartbeat, PlanMsg, REPLACE_MISSI
 use super::keys;
 use super::monitor::{LinkChange, LinkMonitor, heartbeat_period};
 use super::replace::{MAX_MISSION_BYTES, Requests};
-use auv_messages::msg::{
-    CommandAck, CommandKind, NO_NODE, OperatorCommand, Plan, PlannerStatus, VehicleState, WaypointSnapshot,
-};
+use auv_messages::msg::{CommandAck, CommandKind, NO_NODE, OperatorCommand, Plan, PlannerStatus, VehicleState};
 use auv_platform::signal;
 use auv_transport::guard::Guarded;
 use auv_transport::ipc::{IpcContext, Shm, Stamp};
@@ -295,7 +293,7 @@ pub fn run_bridge(
     let mut states = Guarded::new(ctx.inbox::<VehicleState>()?, fp, "link");
     let mut plans = Guarded::new(ctx.inbox::<Plan>()?, fp, "link");
     let mut statuses = Guarded::new(ctx.inbox::<PlannerStatus>()?, fp, "link");
-    let mut snapshots = Guarded::new(ctx.inbox::<WaypointSnapshot>()?, fp, "link");
+    let mut snapshots = Guarded::new(ctx.snapshot_inbox()?, fp, "link");
     let mut acks_in = Guarded::new(ctx.inbox::<CommandAck>()?, fp, "link");
     let mut commands_out = ctx.outbox::<OperatorCommand>(Stamp::new(fp))?;
 

@@ -2,8 +2,8 @@
 //!
 //! Every payload is one JSON object with `format` (= [`FORMAT`]) and `type`:
 //! the iceoryx2 type name of the onboard message it carries
-//! (`auv.VehicleState.v2`, `auv.Plan.v2`, `auv.PlannerStatus.v4`,
-//! `auv.WaypointSnapshot.v1`, `auv.CommandAck.v1`) or one of the link's own
+//! (`auv.VehicleState.v3`, `auv.Plan.v3`, `auv.PlannerStatus.v4`,
+//! `auv.WaypointSnapshot.v2`, `auv.CommandAck.v1`) or one of the link's own
 //! (`auv.shore.Heartbeat`, `auv.shore.Event`, `auv.shore.Command`). Enum
 //! codes travel as their snake_case names; units as on the wire (m, s, ns;
 //! x east, y north, z down). A receiver refuses a payload whose format or
@@ -150,12 +150,12 @@ fn origin(h: &auv_messages::msg::Header) -> Origin {
     }
 }
 
-/// `auv.VehicleState.v2` on `…/state`.
+/// `auv.VehicleState.v3` on `…/state`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct State {
     /// [`FORMAT`].
     pub format: String,
-    /// `auv.VehicleState.v2`.
+    /// `auv.VehicleState.v3`.
     #[serde(rename = "type")]
     pub type_name: String,
     /// Its header.
@@ -182,7 +182,7 @@ pub struct State {
     /// Tasks completed.
     pub tasks_completed: u32,
     /// Waypoints visited, in order.
-    pub route: Vec<u8>,
+    pub route: Vec<u16>,
 }
 
 impl State {
@@ -212,12 +212,12 @@ impl State {
     }
 }
 
-/// `auv.Plan.v2` on `…/plan`.
+/// `auv.Plan.v3` on `…/plan`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlanMsg {
     /// [`FORMAT`].
     pub format: String,
-    /// `auv.Plan.v2`.
+    /// `auv.Plan.v3`.
     #[serde(rename = "type")]
     pub type_name: String,
     /// Its header.
@@ -228,7 +228,7 @@ pub struct PlanMsg {
     /// Why: `initial`, `arrival`, `edge_lost`, `time_changed`, `infeasible`, `sensor_back`, `operator`.
     pub trigger: String,
     /// Waypoints from where the vehicle will be free to the goal.
-    pub route: Vec<u8>,
+    pub route: Vec<u16>,
     /// Predicted route time, s.
     pub time_s: f64,
     /// Predicted weight.
@@ -317,13 +317,13 @@ impl Status {
     }
 }
 
-/// `auv.WaypointSnapshot.v1` on `…/snapshot`: the network's summary (the
+/// `auv.WaypointSnapshot.v2` on `…/snapshot`: the network's summary (the
 /// waypoints where the sensor reports them; no edges).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
     /// [`FORMAT`].
     pub format: String,
-    /// `auv.WaypointSnapshot.v1`.
+    /// `auv.WaypointSnapshot.v2`.
     #[serde(rename = "type")]
     pub type_name: String,
     /// Its header.
@@ -550,13 +550,13 @@ link_message!(State, PlanMsg, Status, Snapshot, Ack, Command, Heartbeat, Event);
 /// The `type` of each onboard message kind, for decoding.
 pub mod types {
     /// [`super::State`].
-    pub const STATE: &str = "auv.VehicleState.v2";
+    pub const STATE: &str = "auv.VehicleState.v3";
     /// [`super::PlanMsg`].
-    pub const PLAN: &str = "auv.Plan.v2";
+    pub const PLAN: &str = "auv.Plan.v3";
     /// [`super::Status`].
     pub const STATUS: &str = "auv.PlannerStatus.v4";
     /// [`super::Snapshot`].
-    pub const SNAPSHOT: &str = "auv.WaypointSnapshot.v1";
+    pub const SNAPSHOT: &str = "auv.WaypointSnapshot.v2";
     /// [`super::Ack`].
     pub const ACK: &str = "auv.CommandAck.v1";
 }
@@ -573,7 +573,7 @@ mod tests {
         assert_eq!(State::of(&boxed_zeroed::<VehicleState>()).type_name, types::STATE);
         assert_eq!(Status::of(&boxed_zeroed::<PlannerStatus>()).type_name, types::STATUS);
         assert_eq!(
-            Snapshot::of(&boxed_zeroed::<WaypointSnapshot>()).type_name,
+            Snapshot::of(&WaypointSnapshot::with_capacity(0)).type_name,
             types::SNAPSHOT
         );
         assert_eq!(Ack::of(&boxed_zeroed::<CommandAck>()).type_name, types::ACK);

@@ -8,7 +8,7 @@
 //!   expression of our own ([`keys`]): `auv/<vehicle>/state`, `…/plan`,
 //!   `…/status`, `…/snapshot`, `…/event`, `…/ack`, `…/heartbeat/onboard`.
 //!   Every payload carries its format ([`encode::FORMAT`], `auv-shore/1`) and
-//!   its type name (the iceoryx2 type it came from, `auv.Plan.v2`), so a
+//!   its type name (the iceoryx2 type it came from, `auv.Plan.v3`), so a
 //!   Python or ROS 2 (`rmw_zenoh`) client can read it with a JSON parser.
 //! - Shore → vehicle: `…/heartbeat/shore` and `…/command` (a command names
 //!   waypoints by name; the bridge resolves and forwards it as an

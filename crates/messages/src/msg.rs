@@ -5,9 +5,12 @@
 //!   from integers, floats and arrays of them. Any bit pattern is therefore a
 //!   valid value: a garbled or hostile sample can be *rejected*, never cause
 //!   undefined behaviour (which a `bool` or Rust `enum` field would). Enums
-//!   travel as `u32` codes and are decoded with `from_code`.
+//!   travel as `u32` codes and are decoded with `from_code`. The snapshot is
+//!   the one message sized by its content: a fixed [`SnapshotHead`] (the
+//!   sample's user header) and a slice of [`WireEdge`] (its payload), held
+//!   in a process as a [`WaypointSnapshot`].
 //! - The version is part of the iceoryx2 type name (`#[type_name]`, e.g.
-//!   `auv.Plan.v2`) and of the service name (`auv/<vehicle>/planner/plan/v2`).
+//!   `auv.Plan.v3`) and of the service name (`auv/<vehicle>/planner/plan/v3`).
 //!   A changed layout gets a new version in both, so stale shared memory from
 //!   an older build answers `IncompatibleTypes` instead of being misread.
 //! - Each message starts with a [`Header`]: sequence number, the mission time
@@ -22,10 +25,18 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 
-use auv_core::problem::MAX_NODES;
+use auv_core::capacity::LARGEST_NODES;
 
-/// Most edges a snapshot can carry: every pair of [`MAX_NODES`] nodes.
-pub const MAX_EDGES: usize = MAX_NODES * (MAX_NODES - 1) / 2;
+/// Most waypoints a message can name: the planner's largest capacity class.
+pub const MAX_WIRE_NODES: usize = LARGEST_NODES;
+
+/// Most edges a snapshot can carry: every pair of [`MAX_WIRE_NODES`] nodes.
+/// A snapshot's edges travel as a slice sized by the mission, so this is a
+/// bound, never a message size.
+pub const MAX_WIRE_EDGES: usize = MAX_WIRE_NODES * (MAX_WIRE_NODES - 1) / 2;
+
+/// A node id in a route carried by a message (every id is below [`MAX_WIRE_NODES`]).
+pub type WireId = u16;
 
 /// "No node" in node-id fields.
 pub const NO_NODE: u32 = u32::MAX;
@@ -65,9 +76,11 @@ pub struct WireNode {
     pub prize: f64,
 }
 
-/// An edge that exists right now, with its task.
+/// An edge that exists right now, with its task: the element of a
+/// snapshot's payload slice.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+#[type_name("auv.WireEdge.v1")]
 pub struct WireEdge {
     /// One end (node id).
     pub a: u32,
@@ -91,13 +104,15 @@ pub enum ObjectiveCode {
     PaperCost = 1,
 }
 
-/// sensor-sim → planner, vehicle-sim: the network as the sensor sees it now
-/// (all waypoint positions, the edges that exist, their tasks). Enough to
-/// build the routing problem without any other input.
+/// sensor-sim → planner, vehicle-sim: the fixed part of the network as the
+/// sensor sees it now (scalars and every waypoint). On the wire it is the
+/// iceoryx2 user header of a sample whose payload is the slice of edges
+/// that exist now (`edge_count` of them), so a snapshot is as large as its
+/// network; in a process the two travel together as a [`WaypointSnapshot`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.WaypointSnapshot.v1")]
-pub struct WaypointSnapshot {
+#[type_name("auv.WaypointSnapshot.v2")]
+pub struct SnapshotHead {
     /// Common header; `mission_time_s` is when the positions were measured.
     pub header: Header,
     /// Sensor update counter: 0 for the first snapshot, +1 per redraw.
@@ -117,7 +132,7 @@ pub struct WaypointSnapshot {
     pub objective: u32,
     /// Valid entries of `nodes`.
     pub node_count: u32,
-    /// Valid entries of `edges`.
+    /// Edges in the sample's payload slice.
     pub edge_count: u32,
     /// Start node id.
     pub start: u32,
@@ -126,9 +141,188 @@ pub struct WaypointSnapshot {
     /// Explicit padding (keeps the layout free of implicit gaps).
     pub _pad: u32,
     /// Waypoints by id.
-    pub nodes: [WireNode; MAX_NODES],
-    /// Edges, each pair at most once.
-    pub edges: [WireEdge; MAX_EDGES],
+    pub nodes: [WireNode; MAX_WIRE_NODES],
+}
+
+impl Default for SnapshotHead {
+    fn default() -> Self {
+        Self {
+            header: Header::default(),
+            epoch: 0,
+            speed_mps: 0.0,
+            time_available_s: 0.0,
+            phi1: 0.0,
+            phi2: 0.0,
+            next_update_s: 0.0,
+            objective: 0,
+            node_count: 0,
+            edge_count: 0,
+            start: 0,
+            goal: 0,
+            _pad: 0,
+            nodes: [WireNode::default(); MAX_WIRE_NODES],
+        }
+    }
+}
+
+/// A waypoint snapshot held by a process: the [`SnapshotHead`] and a
+/// preallocated edge buffer of fixed capacity, of which the first
+/// `edge_count` entries are in use. Receiving one copies the used part of a
+/// sample in, without allocating.
+pub struct WaypointSnapshot {
+    head: Box<SnapshotHead>,
+    /// Edges, each pair at most once; the first `edge_count` are in use.
+    pub edges: Box<[WireEdge]>,
+}
+
+impl core::fmt::Debug for WaypointSnapshot {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("WaypointSnapshot")
+            .field("header", &self.head.header)
+            .field("epoch", &self.head.epoch)
+            .field("node_count", &self.head.node_count)
+            .field("edge_count", &self.head.edge_count)
+            .finish_non_exhaustive()
+    }
+}
+
+impl core::ops::Deref for WaypointSnapshot {
+    type Target = SnapshotHead;
+    fn deref(&self) -> &SnapshotHead {
+        &self.head
+    }
+}
+
+impl core::ops::DerefMut for WaypointSnapshot {
+    fn deref_mut(&mut self) -> &mut SnapshotHead {
+        &mut self.head
+    }
+}
+
+/// A copy with the same capacity, of which only the part in use is copied.
+impl Clone for WaypointSnapshot {
+    fn clone(&self) -> Self {
+        let mut c = Self::with_capacity(self.capacity());
+        *c.head = *self.head;
+        let used = self.edges_in_use();
+        c.edges[..used.len()].copy_from_slice(used);
+        c
+    }
+}
+
+impl Default for WaypointSnapshot {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl WaypointSnapshot {
+    /// An all-zero snapshot with room for every edge of the largest class
+    /// (zeroed pages from the allocator: only the part used is ever touched).
+    pub fn new() -> Self {
+        Self::with_capacity(MAX_WIRE_EDGES)
+    }
+
+    /// An all-zero snapshot with room for `max_edges` edges.
+    pub fn with_capacity(max_edges: usize) -> Self {
+        Self {
+            head: boxed_zeroed::<SnapshotHead>(),
+            edges: zeroed_slice(max_edges),
+        }
+    }
+
+    /// Edges the buffer holds at most.
+    pub fn capacity(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// The fixed part.
+    pub fn head(&self) -> &SnapshotHead {
+        &self.head
+    }
+
+    /// The edges in use (`edge_count`, bounded by the capacity).
+    pub fn edges_in_use(&self) -> &[WireEdge] {
+        &self.edges[..(self.head.edge_count as usize).min(self.edges.len())]
+    }
+
+    /// Copies a received sample in: the scalars, the used waypoints and the
+    /// `edges` (whose length is the sample's; `edge_count` is set to it).
+    /// Refused, changing nothing, when the edges exceed the capacity or the
+    /// node count exceeds [`MAX_WIRE_NODES`].
+    pub fn copy_from(&mut self, head: &SnapshotHead, edges: &[WireEdge]) -> Result<(), RejectKind> {
+        let n = head.node_count as usize;
+        if n > MAX_WIRE_NODES || edges.len() > self.edges.len() {
+            return Err(RejectKind::Malformed);
+        }
+        self.copy_scalars(head);
+        self.head.nodes[..n].copy_from_slice(&head.nodes[..n]);
+        self.edges[..edges.len()].copy_from_slice(edges);
+        self.head.edge_count = edges.len() as u32;
+        Ok(())
+    }
+
+    /// Zeroes the head (nothing in use); the edge buffer keeps its bytes
+    /// and its capacity.
+    pub fn clear(&mut self) {
+        // SAFETY: the head is a whole SnapshotHead; zero bytes are valid.
+        unsafe { zero_in_place(&mut *self.head as *mut SnapshotHead) };
+    }
+
+    /// Takes a received sample in, never failing: what fits is copied; a
+    /// sample whose edges do not fit, whose node count exceeds
+    /// [`MAX_WIRE_NODES`] or whose head disagrees with its slice about the
+    /// edge count is kept as a snapshot that fails validation as
+    /// `Malformed` (so the receiver counts it rejected).
+    pub fn receive(&mut self, head: &SnapshotHead, edges: &[WireEdge]) {
+        let agrees = head.edge_count as usize == edges.len();
+        if self.copy_from(head, edges).is_err() || !agrees {
+            self.copy_scalars(head);
+            self.head.edge_count = u32::MAX;
+        }
+    }
+
+    /// Copies the header and scalar fields of `head` (everything before the
+    /// waypoints, 112 of its 16 496 bytes).
+    fn copy_scalars(&mut self, head: &SnapshotHead) {
+        let scalars = core::mem::offset_of!(SnapshotHead, nodes);
+        // SAFETY: both point to whole heads; the first `scalars` bytes are
+        // the header and scalar fields (integers and floats), which any
+        // bytes form validly; source and destination do not overlap.
+        unsafe {
+            core::ptr::copy_nonoverlapping(
+                (head as *const SnapshotHead).cast::<u8>(),
+                (&mut *self.head as *mut SnapshotHead).cast::<u8>(),
+                scalars,
+            );
+        }
+    }
+
+    /// Copies another held snapshot in (see [`Self::copy_from`]).
+    pub fn copy_snapshot(&mut self, src: &WaypointSnapshot) -> Result<(), RejectKind> {
+        self.copy_from(src.head(), src.edges_in_use())
+    }
+}
+
+/// A heap slice of `n` all-zero edges (zero bytes are a valid edge).
+fn zeroed_slice(n: usize) -> Box<[WireEdge]> {
+    if n == 0 {
+        return Box::new([]);
+    }
+    let layout = match std::alloc::Layout::array::<WireEdge>(n) {
+        Ok(l) => l,
+        Err(_) => return Box::new([]),
+    };
+    // SAFETY: the layout is non-zero-sized; zero bytes are a valid WireEdge
+    // (integers and floats); the pointer comes from the global allocator
+    // with the slice's layout, as Box requires.
+    unsafe {
+        let p = std::alloc::alloc_zeroed(layout) as *mut WireEdge;
+        if p.is_null() {
+            std::alloc::handle_alloc_error(layout);
+        }
+        Box::from_raw(core::ptr::slice_from_raw_parts_mut(p, n))
+    }
 }
 
 /// What the vehicle is doing, [`VehicleState::mode`].
@@ -183,7 +377,7 @@ pub enum Outcome {
 /// vehicle-sim → planner, sensor-sim: where the vehicle is and what it has done.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.VehicleState.v2")]
+#[type_name("auv.VehicleState.v3")]
 pub struct VehicleState {
     /// Common header; `mission_time_s` is the elapsed mission time.
     pub header: Header,
@@ -231,7 +425,7 @@ pub struct VehicleState {
     /// (snapshots, plans and planner status together).
     pub rejected: [u64; REJECT_KINDS],
     /// Nodes visited so far, in order, start first.
-    pub route: [u8; MAX_NODES],
+    pub route: [WireId; MAX_WIRE_NODES],
 }
 
 /// Why the planner re-planned, [`Plan::trigger`].
@@ -260,7 +454,7 @@ pub enum TriggerKind {
 /// heading to (or is at) to the goal.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.Plan.v2")]
+#[type_name("auv.Plan.v3")]
 pub struct Plan {
     /// Common header; `mission_time_s` is the vehicle's time when the trigger happened.
     pub header: Header,
@@ -302,7 +496,7 @@ pub struct Plan {
     /// Explicit padding.
     pub _pad: u32,
     /// Node ids, `route[0]` = where the vehicle will be free, last = goal.
-    pub route: [u8; MAX_NODES],
+    pub route: [WireId; MAX_WIRE_NODES],
 }
 
 /// Kinds of rejected input, the index into the reject counters. Stable
@@ -623,7 +817,7 @@ pub struct CommandAck {
 /// round trip carries exactly the bytes a trigger and its plan carry.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.bench.RawPing.v1")]
+#[type_name("auv.bench.RawPing.v2")]
 pub struct RawPing {
     /// Common header.
     pub header: Header,
@@ -634,7 +828,7 @@ pub struct RawPing {
 /// Latency bench only: the answer to a [`RawPing`], the size of a [`Plan`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[type_name("auv.bench.RawPong.v1")]
+#[type_name("auv.bench.RawPong.v2")]
 pub struct RawPong {
     /// Common header.
     pub header: Header,
@@ -669,19 +863,30 @@ pub trait Validate {
 }
 
 /// Gives generic code the header of any message.
-pub trait Message: Copy + core::fmt::Debug + ZeroCopySend + Validate + 'static {
+pub trait Message: core::fmt::Debug + Validate + 'static {
     /// Short name for logs ("plan", "vehicle state", …).
     const NAME: &'static str;
+    /// The versioned iceoryx2 type name (`auv.Plan.v3`; for a snapshot,
+    /// its head's).
+    fn type_name() -> &'static str;
     /// The header.
     fn header(&self) -> &Header;
     /// The header, mutable (the transport stamps it when sending).
     fn header_mut(&mut self) -> &mut Header;
 }
 
+/// A message that travels as one fixed-size `repr(C)` sample (every message
+/// but the snapshot, whose edges are a slice).
+pub trait FixedMessage: Message + Copy + ZeroCopySend {}
+
 macro_rules! impl_message {
     ($t:ty, $name:literal) => {
         impl Message for $t {
             const NAME: &'static str = $name;
+            fn type_name() -> &'static str {
+                // SAFETY: `type_name` only returns the static string the derive set.
+                unsafe { <$t as ZeroCopySend>::type_name() }
+            }
             #[inline]
             fn header(&self) -> &Header {
                 &self.header
@@ -691,10 +896,31 @@ macro_rules! impl_message {
                 &mut self.header
             }
         }
+        impl FixedMessage for $t {}
     };
 }
 
-impl_message!(WaypointSnapshot, "waypoint snapshot");
+impl Message for WaypointSnapshot {
+    const NAME: &'static str = "waypoint snapshot";
+    fn type_name() -> &'static str {
+        // SAFETY: `type_name` only returns the static string the derive set.
+        unsafe { <SnapshotHead as ZeroCopySend>::type_name() }
+    }
+    #[inline]
+    fn header(&self) -> &Header {
+        &self.head.header
+    }
+    #[inline]
+    fn header_mut(&mut self) -> &mut Header {
+        &mut self.head.header
+    }
+}
+
+/// The edge slice's element type name (`auv.WireEdge.v1`).
+pub fn edge_type_name() -> &'static str {
+    // SAFETY: `type_name` only returns the static string the derive set.
+    unsafe { <WireEdge as ZeroCopySend>::type_name() }
+}
 impl_message!(VehicleState, "vehicle state");
 impl_message!(Plan, "plan");
 impl_message!(PlannerStatus, "planner status");
@@ -703,10 +929,9 @@ impl_message!(CommandAck, "command ack");
 impl_message!(RawPing, "bench ping");
 impl_message!(RawPong, "bench pong");
 
-/// The versioned type name of message `T` (`auv.Plan.v2`).
+/// The versioned type name of message `T` (`auv.Plan.v3`).
 pub fn type_name_of<T: Message>() -> &'static str {
-    // SAFETY: `type_name` only returns the static string the derive set.
-    unsafe { <T as ZeroCopySend>::type_name() }
+    T::type_name()
 }
 
 /// Decodes a `u32` enum code.
@@ -772,8 +997,8 @@ fn node(id: u32, n: usize) -> Result<usize, RejectKind> {
     }
 }
 
-fn ids_in_range(ids: &[u8]) -> Result<(), RejectKind> {
-    if ids.iter().all(|&id| (id as usize) < MAX_NODES) {
+fn ids_in_range(ids: &[WireId]) -> Result<(), RejectKind> {
+    if ids.iter().all(|&id| (id as usize) < MAX_WIRE_NODES) {
         Ok(())
     } else {
         Err(RejectKind::NodeOutOfRange)
@@ -790,6 +1015,18 @@ fn header_ok(h: &Header) -> Result<(), RejectKind> {
 
 impl Validate for WaypointSnapshot {
     fn validate(&self) -> Result<(), RejectKind> {
+        validate_snapshot(&self.head, self.edges_in_use(), self.capacity())
+    }
+}
+
+/// Checks a snapshot's head and its `edges` (a received sample's slice, or
+/// the used part of a held buffer of `capacity` edges).
+pub fn validate_snapshot(head: &SnapshotHead, edges: &[WireEdge], capacity: usize) -> Result<(), RejectKind> {
+    head.validate_with(edges, capacity)
+}
+
+impl SnapshotHead {
+    fn validate_with(&self, edges: &[WireEdge], capacity: usize) -> Result<(), RejectKind> {
         header_ok(&self.header)?;
         positive(self.speed_mps)?;
         positive(self.time_available_s)?;
@@ -799,9 +1036,9 @@ impl Validate for WaypointSnapshot {
             at_least(self.phi1, 0.0)?;
             at_least(self.phi2, 0.0)?;
         }
-        let n = count(self.node_count, MAX_NODES)?;
-        let m = count(self.edge_count, MAX_EDGES)?;
-        if n < 2 {
+        let n = count(self.node_count, MAX_WIRE_NODES)?;
+        let m = count(self.edge_count, MAX_WIRE_EDGES.min(capacity))?;
+        if m != edges.len() || n < 2 {
             return Err(RejectKind::Malformed);
         }
         let (s, g) = (node(self.start, n)?, node(self.goal, n)?);
@@ -814,7 +1051,7 @@ impl Validate for WaypointSnapshot {
             finite(p.z)?;
             at_least(p.prize, 0.0)?;
         }
-        for e in &self.edges[..m] {
+        for e in edges {
             let (a, b) = (node(e.a, n)?, node(e.b, n)?);
             if a == b {
                 return Err(RejectKind::Malformed);
@@ -840,9 +1077,9 @@ impl Validate for VehicleState {
         code::<VehicleMode>(self.mode)?;
         code::<VehicleEvent>(self.event)?;
         code::<Outcome>(self.outcome)?;
-        node(self.from_node, MAX_NODES)?;
-        node(self.to_node, MAX_NODES)?;
-        let len = count(self.route_len, MAX_NODES)?;
+        node(self.from_node, MAX_WIRE_NODES)?;
+        node(self.to_node, MAX_WIRE_NODES)?;
+        let len = count(self.route_len, MAX_WIRE_NODES)?;
         if len == 0 {
             return Err(RejectKind::Malformed);
         }
@@ -867,7 +1104,7 @@ impl Validate for Plan {
                 return Err(RejectKind::Malformed);
             }
         }
-        let len = count(self.route_len, MAX_NODES)?;
+        let len = count(self.route_len, MAX_WIRE_NODES)?;
         if len < 1 {
             return Err(RejectKind::Malformed);
         }
@@ -906,7 +1143,7 @@ impl Validate for OperatorCommand {
         }
         match code::<CommandKind>(self.kind)? {
             CommandKind::SetTimeBudget => positive(self.value_s),
-            CommandKind::AddTask | CommandKind::RemoveTask => node(self.node, MAX_NODES).map(|_| ()),
+            CommandKind::AddTask | CommandKind::RemoveTask => node(self.node, MAX_WIRE_NODES).map(|_| ()),
             CommandKind::AbortToGoal => Ok(()),
         }
     }
@@ -926,18 +1163,19 @@ impl Validate for CommandAck {
 
 /// Zero-initialises a message in place. Every message type consists only of
 /// integers, floats and arrays of them, so all-zero bytes are a valid value;
-/// building in place avoids moving a 260 KiB snapshot through the stack.
+/// building in place avoids moving a 16 KiB snapshot head through the stack.
 ///
 /// # Safety
 /// `ptr` must be valid for writes of one `T` and properly aligned; `T` must be
 /// one of the message types of this module.
-pub unsafe fn zero_in_place<T: Message>(ptr: *mut T) {
+pub unsafe fn zero_in_place<T: ZeroCopySend>(ptr: *mut T) {
     // SAFETY: guaranteed by the caller; zero bytes are a valid T (see above).
     unsafe { core::ptr::write_bytes(ptr, 0, 1) };
 }
 
 /// A heap-allocated all-zero message (set-up code and tests; not hot paths).
-pub fn boxed_zeroed<T: Message>() -> Box<T> {
+/// `T` is one of this module's `repr(C)` types, all integers and floats.
+pub fn boxed_zeroed<T: ZeroCopySend>() -> Box<T> {
     let layout = std::alloc::Layout::new::<T>();
     // SAFETY: T is not zero-sized (it has a Header); zero bytes are a valid T
     // (see `zero_in_place`), and the pointer comes from the global allocator
@@ -1049,13 +1287,13 @@ impl core::fmt::Display for RejectCounters {
 }
 
 /// A route carried in a message, as node ids (`len` checked against capacity).
-pub fn route_ids(route: &[u8; MAX_NODES], len: u32) -> &[u8] {
-    &route[..(len as usize).min(MAX_NODES)]
+pub fn route_ids(route: &[WireId; MAX_WIRE_NODES], len: u32) -> &[WireId] {
+    &route[..(len as usize).min(MAX_WIRE_NODES)]
 }
 
 /// A plan message through `ids` with sequence number `seq`, every other
 /// field zero (for tests of a plan's receiver).
-pub fn plan_through(ids: &[u8], seq: u64) -> Plan {
+pub fn plan_through(ids: &[WireId], seq: u64) -> Plan {
     let mut p = *boxed_zeroed::<Plan>();
     p.header = Header {
         seq,
@@ -1082,8 +1320,8 @@ mod tests {
         }
     }
 
-    fn small_snapshot() -> Box<WaypointSnapshot> {
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+    fn small_snapshot() -> WaypointSnapshot {
+        let mut s = WaypointSnapshot::with_capacity(4);
         s.header = header(1);
         s.speed_mps = 1.5;
         s.time_available_s = 100.0;
@@ -1112,12 +1350,10 @@ mod tests {
     fn type_names_carry_the_version() {
         // SAFETY: type_name only returns the static string set by the derive.
         unsafe {
-            assert_eq!(
-                <WaypointSnapshot as ZeroCopySend>::type_name(),
-                "auv.WaypointSnapshot.v1"
-            );
-            assert_eq!(<VehicleState as ZeroCopySend>::type_name(), "auv.VehicleState.v2");
-            assert_eq!(<Plan as ZeroCopySend>::type_name(), "auv.Plan.v2");
+            assert_eq!(<SnapshotHead as ZeroCopySend>::type_name(), "auv.WaypointSnapshot.v2");
+            assert_eq!(<WireEdge as ZeroCopySend>::type_name(), "auv.WireEdge.v1");
+            assert_eq!(<VehicleState as ZeroCopySend>::type_name(), "auv.VehicleState.v3");
+            assert_eq!(<Plan as ZeroCopySend>::type_name(), "auv.Plan.v3");
             assert_eq!(<PlannerStatus as ZeroCopySend>::type_name(), "auv.PlannerStatus.v4");
             assert_eq!(<OperatorCommand as ZeroCopySend>::type_name(), "auv.OperatorCommand.v1");
             assert_eq!(<CommandAck as ZeroCopySend>::type_name(), "auv.CommandAck.v1");
@@ -1130,17 +1366,17 @@ mod tests {
         assert_eq!(core::mem::size_of::<Header>(), 40);
         assert_eq!(core::mem::size_of::<WireEdge>(), 32);
         assert_eq!(
-            core::mem::size_of::<WaypointSnapshot>(),
-            40 + 8 * 6 + 4 * 6 + 32 * MAX_NODES + 32 * MAX_EDGES
+            core::mem::size_of::<SnapshotHead>(),
+            40 + 8 * 6 + 4 * 6 + 32 * MAX_WIRE_NODES
         );
-        assert_eq!(core::mem::size_of::<Plan>(), 40 + 8 * 10 + 4 * 8 + MAX_NODES);
+        assert_eq!(core::mem::size_of::<Plan>(), 40 + 8 * 10 + 4 * 8 + 2 * MAX_WIRE_NODES);
         assert_eq!(core::mem::size_of::<OperatorCommand>(), 40 + 8 * 2 + 4 * 2);
         assert_eq!(core::mem::size_of::<CommandAck>(), 40 + 8 * 2 + 4 * 4);
         assert_eq!(core::mem::size_of::<RawPing>(), core::mem::size_of::<VehicleState>());
         assert_eq!(core::mem::size_of::<RawPong>(), core::mem::size_of::<Plan>());
         assert_eq!(
             core::mem::size_of::<VehicleState>(),
-            40 + 8 * 3 + 8 * 5 + 8 * 2 + 4 * 10 + 8 * REJECT_KINDS + MAX_NODES
+            40 + 8 * 3 + 8 * 5 + 8 * 2 + 4 * 10 + 8 * REJECT_KINDS + 2 * MAX_WIRE_NODES
         );
     }
 
@@ -1154,7 +1390,22 @@ mod tests {
         s.edges[1].b = 3;
         assert_eq!(s.validate(), Err(RejectKind::NodeOutOfRange));
         let mut s = small_snapshot();
-        s.edge_count = MAX_EDGES as u32 + 1;
+        s.edge_count = 5;
+        assert_eq!(
+            s.validate(),
+            Err(RejectKind::Malformed),
+            "more edges than the buffer holds"
+        );
+        let s = small_snapshot();
+        assert_eq!(
+            validate_snapshot(s.head(), &s.edges[..1], 4),
+            Err(RejectKind::Malformed),
+            "a slice shorter than edge_count"
+        );
+        let mut big = WaypointSnapshot::with_capacity(1);
+        assert_eq!(big.copy_snapshot(&small_snapshot()), Err(RejectKind::Malformed));
+        let mut s = small_snapshot();
+        s.node_count = MAX_WIRE_NODES as u32 + 1;
         assert_eq!(s.validate(), Err(RejectKind::Malformed));
         let mut s = small_snapshot();
         s.edges[0].risk = 0.0;
@@ -1218,7 +1469,7 @@ mod tests {
         );
     }
 
-    fn bytes_to<T: Message>(bytes: &[u8]) -> Box<T> {
+    fn bytes_to<T: ZeroCopySend>(bytes: &[u8]) -> Box<T> {
         let mut m = boxed_zeroed::<T>();
         let n = core::mem::size_of::<T>().min(bytes.len());
         // SAFETY: any bytes are a valid T (integers and floats only).
@@ -1233,7 +1484,9 @@ mod tests {
             let _ = bytes_to::<VehicleState>(&bytes).validate();
             let _ = bytes_to::<Plan>(&bytes).validate();
             let _ = bytes_to::<PlannerStatus>(&bytes).validate();
-            let _ = bytes_to::<WaypointSnapshot>(&bytes).validate();
+            let head = bytes_to::<SnapshotHead>(&bytes);
+            let edges: Vec<WireEdge> = bytes.chunks_exact(32).map(|c| *bytes_to::<WireEdge>(c)).collect();
+            let _ = validate_snapshot(&head, &edges, MAX_WIRE_EDGES);
             let _ = bytes_to::<OperatorCommand>(&bytes).validate();
             let _ = bytes_to::<CommandAck>(&bytes).validate();
         }
@@ -1243,8 +1496,8 @@ mod tests {
             let s = bytes_to::<VehicleState>(&bytes);
             if s.validate().is_ok() {
                 prop_assert!(s.time_left_s.is_finite());
-                prop_assert!((s.to_node as usize) < MAX_NODES);
-                prop_assert!((1..=MAX_NODES).contains(&(s.route_len as usize)));
+                prop_assert!((s.to_node as usize) < MAX_WIRE_NODES);
+                prop_assert!((1..=MAX_WIRE_NODES).contains(&(s.route_len as usize)));
             }
         }
     }

@@ -8,28 +8,34 @@
 //! `set_edge`/[`edge_time_s`]; [`write_snapshot`] and [`to_instance`] are
 //! exact inverses for valid instances (tested).
 
-use crate::msg::{MAX_EDGES, ObjectiveCode, WaypointSnapshot, WireEdge, WireNode};
+use crate::msg::{MAX_WIRE_NODES, ObjectiveCode, SnapshotHead, WaypointSnapshot, WireEdge, WireNode};
 use auv_core::instance::{Edge, Instance, Node, Objective};
-use auv_core::problem::{MAX_NODES, NodeSet, Problem, ProblemError, edge_time_s};
+use auv_core::problem::{NodeSet, Problem, ProblemError, edge_time_s};
 
 /// Why an instance does not fit a snapshot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum SnapshotError {
-    /// More nodes than [`MAX_NODES`].
-    #[error("{0} waypoints exceed the message capacity of {MAX_NODES}")]
+    /// More nodes than [`MAX_WIRE_NODES`].
+    #[error("{0} waypoints exceed the message capacity of {MAX_WIRE_NODES}")]
     TooManyNodes(usize),
-    /// More edges than [`MAX_EDGES`].
-    #[error("{0} edges exceed the message capacity of {MAX_EDGES}")]
-    TooManyEdges(usize),
+    /// More edges than the snapshot buffer holds.
+    #[error("{0} edges exceed the snapshot's capacity of {1}")]
+    TooManyEdges(usize, usize),
+}
+
+/// Edges a snapshot of an `n`-node network can carry at most (every pair):
+/// what a publisher sizes its samples for.
+pub fn max_edges_of(n: usize) -> usize {
+    n * n.saturating_sub(1) / 2
 }
 
 /// Writes `inst` into `out` (header untouched; `epoch` set).
 pub fn write_snapshot(inst: &Instance, epoch: u64, out: &mut WaypointSnapshot) -> Result<(), SnapshotError> {
-    if inst.nodes.len() > MAX_NODES {
+    if inst.nodes.len() > MAX_WIRE_NODES {
         return Err(SnapshotError::TooManyNodes(inst.nodes.len()));
     }
-    if inst.edges.len() > MAX_EDGES {
-        return Err(SnapshotError::TooManyEdges(inst.edges.len()));
+    if inst.edges.len() > out.capacity() {
+        return Err(SnapshotError::TooManyEdges(inst.edges.len(), out.capacity()));
     }
     out.epoch = epoch;
     out.speed_mps = inst.speed_mps;
@@ -71,7 +77,7 @@ pub fn write_snapshot(inst: &Instance, epoch: u64, out: &mut WaypointSnapshot) -
 }
 
 /// The objective a (validated) snapshot states.
-pub fn objective(s: &WaypointSnapshot) -> Objective {
+pub fn objective(s: &SnapshotHead) -> Objective {
     if s.objective == ObjectiveCode::PaperCost as u32 {
         Objective::PaperCost {
             phi1: s.phi1,
@@ -84,8 +90,7 @@ pub fn objective(s: &WaypointSnapshot) -> Objective {
 
 /// The snapshot as an instance (reports, plots, export; allocates).
 pub fn to_instance(s: &WaypointSnapshot, name: &str) -> Instance {
-    let n = (s.node_count as usize).min(MAX_NODES);
-    let m = (s.edge_count as usize).min(MAX_EDGES);
+    let n = (s.node_count as usize).min(MAX_WIRE_NODES);
     Instance {
         name: name.to_string(),
         speed_mps: s.speed_mps,
@@ -101,7 +106,8 @@ pub fn to_instance(s: &WaypointSnapshot, name: &str) -> Instance {
                 prize: w.prize,
             })
             .collect(),
-        edges: s.edges[..m]
+        edges: s
+            .edges_in_use()
             .iter()
             .map(|e| Edge {
                 a: e.a as usize,
@@ -117,7 +123,7 @@ pub fn to_instance(s: &WaypointSnapshot, name: &str) -> Instance {
 
 /// 3-D distance between two waypoints of a snapshot, m.
 #[inline]
-pub fn distance_m(s: &WaypointSnapshot, a: usize, b: usize) -> f64 {
+pub fn distance_m(s: &SnapshotHead, a: usize, b: usize) -> f64 {
     let (p, q) = (&s.nodes[a], &s.nodes[b]);
     auv_core::instance::distance_3d_m([p.x, p.y, p.z], [q.x, q.y, q.z])
 }
@@ -126,24 +132,25 @@ pub fn distance_m(s: &WaypointSnapshot, a: usize, b: usize) -> f64 {
 /// `budget_s` left and `excluded` nodes removed. Each edge's time is the
 /// format's plus half the arrival allowance of each end (zeros give exactly
 /// the format's figures). Does not allocate.
-pub fn fill_problem(
+/// `arrival_allowance_s` has an entry per node (a missing entry counts 0).
+pub fn fill_problem<const W: usize>(
     s: &WaypointSnapshot,
-    p: &mut Problem,
+    p: &mut Problem<W>,
     start: usize,
-    excluded: NodeSet,
+    excluded: NodeSet<W>,
     budget_s: f64,
-    arrival_allowance_s: &[f64; MAX_NODES],
+    arrival_allowance_s: &[f64],
 ) -> Result<(), ProblemError> {
-    let n = (s.node_count as usize).min(MAX_NODES);
+    let n = (s.node_count as usize).min(MAX_WIRE_NODES);
     p.begin(n, start, s.goal as usize, budget_s, objective(s), excluded)?;
     for (i, w) in s.nodes[..n].iter().enumerate() {
         p.set_prize(i, w.prize);
     }
-    let m = (s.edge_count as usize).min(MAX_EDGES);
-    for e in &s.edges[..m] {
+    let allowance_of = |i: usize| arrival_allowance_s.get(i).copied().unwrap_or(0.0);
+    for e in s.edges_in_use() {
         let (a, b) = (e.a as usize, e.b as usize);
         let d = distance_m(s, a, b);
-        let allowance = 0.5 * (arrival_allowance_s[a] + arrival_allowance_s[b]);
+        let allowance = 0.5 * (allowance_of(a) + allowance_of(b));
         let time = edge_time_s(d, s.speed_mps, e.task_time_s) + allowance;
         p.set_edge(a, b, d, time, e.priority, e.risk);
     }
@@ -153,45 +160,23 @@ pub fn fill_problem(
 /// The edge `a`–`b` of a snapshot, if it exists (linear scan: the vehicle's
 /// per-arrival look-up, not a solver path).
 pub fn find_edge(s: &WaypointSnapshot, a: usize, b: usize) -> Option<&WireEdge> {
-    let m = (s.edge_count as usize).min(MAX_EDGES);
     let (a, b) = (a as u32, b as u32);
-    s.edges[..m]
+    s.edges_in_use()
         .iter()
         .find(|e| (e.a == a && e.b == b) || (e.a == b && e.b == a))
-}
-
-/// Copies the used part of a snapshot (the whole struct is 260 KiB; a
-/// 40-node network uses a few KiB of it): every scalar field, then the used
-/// nodes and edges.
-pub fn copy_snapshot(src: &WaypointSnapshot, dst: &mut WaypointSnapshot) {
-    let n = (src.node_count as usize).min(MAX_NODES);
-    let m = (src.edge_count as usize).min(MAX_EDGES);
-    let scalars = core::mem::offset_of!(WaypointSnapshot, nodes);
-    // SAFETY: both point to whole snapshots; the first `scalars` bytes are
-    // the header and scalar fields (integers and floats), which any bytes
-    // form validly; source and destination do not overlap (& vs &mut).
-    unsafe {
-        core::ptr::copy_nonoverlapping(
-            (src as *const WaypointSnapshot).cast::<u8>(),
-            (dst as *mut WaypointSnapshot).cast::<u8>(),
-            scalars,
-        );
-    }
-    dst.nodes[..n].copy_from_slice(&src.nodes[..n]);
-    dst.edges[..m].copy_from_slice(&src.edges[..m]);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msg::{Validate, boxed_zeroed};
+    use crate::msg::Validate;
     use auv_core::fixtures::{line_instance, random_instance};
     use auv_core::route::{Route, RouteStats};
 
     #[test]
     fn instance_round_trips_through_a_snapshot() {
         let inst = random_instance(20, 0.3, 5000.0, 3);
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+        let mut s = WaypointSnapshot::new();
         write_snapshot(&inst, 4, &mut s).unwrap();
         s.header.seq = 1;
         assert_eq!(s.validate(), Ok(()));
@@ -203,12 +188,12 @@ mod tests {
     #[test]
     fn problem_from_snapshot_equals_problem_from_instance() {
         let inst = random_instance(30, 0.25, 8000.0, 11);
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+        let mut s = WaypointSnapshot::new();
         write_snapshot(&inst, 0, &mut s).unwrap();
-        let mut from_msg = Problem::new();
+        let mut from_msg: Problem = Problem::new();
         let mut ex = NodeSet::EMPTY;
         ex.insert(3);
-        fill_problem(&s, &mut from_msg, 0, ex, 6000.0, &[0.0; MAX_NODES]).unwrap();
+        fill_problem(&s, &mut from_msg, 0, ex, 6000.0, &[]).unwrap();
         let mut from_inst = Problem::new();
         from_inst.load_instance(&inst, 0, ex, 6000.0).unwrap();
         for a in 0..30 {
@@ -223,10 +208,10 @@ mod tests {
     #[test]
     fn route_figures_on_the_snapshot_problem_match_the_checker() {
         let inst = line_instance();
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+        let mut s = WaypointSnapshot::new();
         write_snapshot(&inst, 0, &mut s).unwrap();
-        let mut p = Problem::new();
-        fill_problem(&s, &mut p, 0, NodeSet::EMPTY, inst.time_available_s, &[0.0; MAX_NODES]).unwrap();
+        let mut p: Problem = Problem::new();
+        fill_problem(&s, &mut p, 0, NodeSet::EMPTY, inst.time_available_s, &[]).unwrap();
         let r = Route::from_slice(&[0, 1, 2, 3]).unwrap();
         let e = p.evaluate(&r).unwrap();
         let c = RouteStats::from_instance(&inst, &[0, 1, 2, 3]).unwrap();
@@ -239,11 +224,17 @@ mod tests {
     #[test]
     fn oversized_instances_are_refused() {
         let mut inst = line_instance();
-        inst.nodes = vec![inst.nodes[0]; MAX_NODES + 1];
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+        inst.nodes = vec![inst.nodes[0]; MAX_WIRE_NODES + 1];
+        let mut s = WaypointSnapshot::new();
         assert_eq!(
             write_snapshot(&inst, 0, &mut s),
-            Err(SnapshotError::TooManyNodes(MAX_NODES + 1))
+            Err(SnapshotError::TooManyNodes(MAX_WIRE_NODES + 1))
+        );
+        let inst = line_instance();
+        let mut small = WaypointSnapshot::with_capacity(1);
+        assert_eq!(
+            write_snapshot(&inst, 0, &mut small),
+            Err(SnapshotError::TooManyEdges(inst.edges.len(), 1))
         );
     }
 }

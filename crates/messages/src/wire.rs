@@ -22,8 +22,8 @@
 
 use std::sync::Arc;
 
-use crate::msg::{ContextCheck, Header, MAX_EDGES, RejectKind, VehicleState, WaypointSnapshot, route_ids};
-use auv_core::problem::{MAX_NODES, NodeSet};
+use crate::msg::{ContextCheck, Header, MAX_WIRE_NODES, RejectKind, VehicleState, WaypointSnapshot, WireId, route_ids};
+use auv_core::capacity::{LARGEST_WORDS, NodeSet};
 use auv_world::chart::WaterMap;
 use auv_world::load::MissionWorld;
 use auv_world::mission_file::Water;
@@ -380,7 +380,7 @@ pub fn tamper_header(f: Fault, h: &mut Header, last_good_seq: u64) {
 /// the waypoint (any value). Returns false when the fault cannot be built
 /// here (a header fault, or no land on the chart for `off_water`).
 pub fn corrupt_snapshot(f: Fault, s: &mut WaypointSnapshot, rules: &WireRules, k: u64) -> bool {
-    let n = (s.node_count as usize).clamp(1, MAX_NODES);
+    let n = (s.node_count as usize).clamp(1, MAX_WIRE_NODES);
     let i = (k % n as u64) as usize;
     match f {
         Fault::NonFinite => {
@@ -388,8 +388,9 @@ pub fn corrupt_snapshot(f: Fault, s: &mut WaypointSnapshot, rules: &WireRules, k
             true
         }
         Fault::NodeOutOfRange => {
-            if s.edge_count > 0 {
-                let e = (k % u64::from(s.edge_count).min(MAX_EDGES as u64)) as usize;
+            let m = s.edges_in_use().len();
+            if m > 0 {
+                let e = (k % m as u64) as usize;
                 s.edges[e].b = s.node_count;
             } else {
                 s.goal = s.node_count;
@@ -458,16 +459,15 @@ pub fn bad_route(
     f: Fault,
     good: &[u16],
     snap: &WaypointSnapshot,
-    visited: &[u8],
-    out: &mut [u8; MAX_NODES],
+    visited: &[WireId],
+    out: &mut [WireId; MAX_WIRE_NODES],
 ) -> Option<usize> {
-    // Plans carry ids below MAX_NODES (the service's class), so a byte each.
-    let (first, goal) = (*good.first()? as u8, *good.last()? as u8);
+    let (first, goal) = (*good.first()?, *good.last()?);
     if first == goal {
         return None;
     }
-    let n = (snap.node_count as usize).min(MAX_NODES);
-    let mut seen: NodeSet = NodeSet::EMPTY;
+    let n = (snap.node_count as usize).min(MAX_WIRE_NODES);
+    let mut seen: NodeSet<LARGEST_WORDS> = NodeSet::EMPTY;
     for &v in visited {
         seen.insert(v as usize);
     }
@@ -486,7 +486,7 @@ pub fn bad_route(
         _ => return None,
     };
     out[0] = first;
-    out[1] = via as u8;
+    out[1] = via as WireId;
     if via == goal as usize {
         return Some(2);
     }
@@ -510,8 +510,8 @@ mod tests {
         .unwrap()
     }
 
-    fn snapshot(w: &MissionWorld, epoch: u64) -> Box<WaypointSnapshot> {
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+    fn snapshot(w: &MissionWorld, epoch: u64) -> WaypointSnapshot {
+        let mut s = WaypointSnapshot::new();
         write_snapshot(&w.snapshot(), epoch, &mut s).unwrap();
         s.header.seq = 1;
         s
@@ -587,38 +587,22 @@ mod tests {
     fn bad_routes_use_a_non_edge_or_a_visited_node() {
         let w = world(7);
         let s = snapshot(&w, 0);
-        let (start, goal) = (s.start as u8, s.goal as u8);
-        let mut out = [0u8; MAX_NODES];
-        let len = bad_route(
-            Fault::NonEdge,
-            &[u16::from(start), u16::from(goal)],
-            &s,
-            &[start],
-            &mut out,
-        )
-        .unwrap();
+        let (start, goal) = (s.start as WireId, s.goal as WireId);
+        let mut out = [0; MAX_WIRE_NODES];
+        let len = bad_route(Fault::NonEdge, &[start, goal], &s, &[start], &mut out).unwrap();
         let r = &out[..len];
         assert_eq!((r[0], r[len - 1]), (start, goal));
         assert!(crate::network::find_edge(&s, r[0] as usize, r[1] as usize).is_none());
         // Nothing visited but the start: no visited-node plan can be built yet.
         assert_eq!(
-            bad_route(
-                Fault::VisitedNode,
-                &[u16::from(start), u16::from(goal)],
-                &s,
-                &[start],
-                &mut out
-            ),
+            bad_route(Fault::VisitedNode, &[start, goal], &s, &[start], &mut out),
             None
         );
-        let len = bad_route(Fault::VisitedNode, &[3, u16::from(goal)], &s, &[start, 3], &mut out).unwrap();
+        let len = bad_route(Fault::VisitedNode, &[3, goal], &s, &[start, 3], &mut out).unwrap();
         assert_eq!(&out[..len], &[3, start, goal]);
-        let len = bad_route(Fault::BadPlan, &[3, u16::from(goal)], &s, &[start, 3], &mut out).unwrap();
+        let len = bad_route(Fault::BadPlan, &[3, goal], &s, &[start, 3], &mut out).unwrap();
         assert_eq!(&out[..len], &[goal]);
-        assert_eq!(
-            bad_route(Fault::OffWater, &[3, u16::from(goal)], &s, &[start, 3], &mut out),
-            None
-        );
+        assert_eq!(bad_route(Fault::OffWater, &[3, goal], &s, &[start, 3], &mut out), None);
     }
 
     #[test]

@@ -25,15 +25,17 @@ use std::time::{Duration, Instant};
 
 use hdrhistogram::Histogram;
 
-use auv_core::problem::{MAX_NODES, NodeSet, Problem, ProblemError};
+use auv_core::capacity::{DEFAULT_WORDS, LARGEST_WORDS, PerNode, nodes_of};
+use auv_core::problem::{NodeSet, Problem, ProblemError};
 use auv_core::rng::{PlannerRng, derive_seed};
 use auv_core::route::{Route, RouteEval};
 use auv_core::solver::{Algorithm, Budget, Solver, StopReason, run};
 use auv_messages::msg::{
-    AckStatus, CommandAck, CommandKind, FromCode, OperatorCommand, Outcome, Plan, PlannerPhase, PlannerStatus,
-    RefuseReason, RejectCounters, TriggerKind, VehicleMode, VehicleState, WaypointSnapshot, boxed_zeroed,
+    AckStatus, CommandAck, CommandKind, FromCode, MAX_WIRE_NODES, OperatorCommand, Outcome, Plan, PlannerPhase,
+    PlannerStatus, RefuseReason, RejectCounters, TriggerKind, VehicleMode, VehicleState, WaypointSnapshot,
+    boxed_zeroed,
 };
-use auv_messages::network::{copy_snapshot, fill_problem, objective};
+use auv_messages::network::{fill_problem, objective};
 use auv_platform::clock::mono_now_ns;
 
 /// Settings of the re-planning service; [`ServiceConfig::default`] documents each default.
@@ -58,7 +60,7 @@ pub struct ServiceConfig {
     /// Expected extra time to reach each waypoint while it drifts, s, by
     /// node id (see `scenario::chase`); added to the edges' planned times,
     /// half at each end, so a route pays it once per drifting waypoint.
-    pub arrival_allowance_s: [f64; MAX_NODES],
+    pub arrival_allowance_s: [f64; MAX_WIRE_NODES],
     /// Seed of the planner's random draws.
     pub seed: u64,
     /// The solver `make_solver` builds (default `auto`).
@@ -81,7 +83,7 @@ impl Default for ServiceConfig {
             replan_threshold_s: 120.0,
             cut_at_deadline: true,
             reserve_s: DEFAULT_RESERVE_S,
-            arrival_allowance_s: [0.0; MAX_NODES],
+            arrival_allowance_s: [0.0; MAX_WIRE_NODES],
             seed: 1,
             algorithm: Algorithm::Auto,
             fingerprint: 0,
@@ -132,8 +134,9 @@ pub enum ServiceEvent {
         replan: u32,
         /// Why.
         trigger: TriggerKind,
-        /// The route from the vehicle's next node to the goal.
-        route: Route,
+        /// The route from the vehicle's next node to the goal (in the
+        /// largest class, so one event type serves every class).
+        route: Route<LARGEST_WORDS>,
         /// Its figures.
         eval: RouteEval,
         /// Budget planned for, s.
@@ -193,7 +196,7 @@ fn rank(k: TriggerKind) -> u8 {
 
 /// The latest vehicle state, as far as planning needs it.
 #[derive(Clone, Copy, Debug, Default)]
-struct VehicleView {
+struct VehicleView<const W: usize> {
     known: bool,
     session: u64,
     seq: u64,
@@ -202,28 +205,28 @@ struct VehicleView {
     time_left_s: f64,
     eta_free_s: f64,
     arrivals: u32,
-    visited: NodeSet,
+    visited: NodeSet<W>,
 }
 
 /// The last published plan.
 #[derive(Clone, Copy)]
-struct PlanView {
-    route: Route,
+struct PlanView<const W: usize> {
+    route: Route<W>,
     /// `cum_s[i]`: planned time from `route[i]` to the goal, s.
-    cum_s: [f64; MAX_NODES],
+    cum_s: PerNode<f64, W>,
     /// (session, arrivals, to_node) of the vehicle state it answered.
     key: (u64, u32, usize),
 }
 
 /// What the operator's commands changed, applied at every re-plan.
 #[derive(Clone, Copy, Debug, Default)]
-struct OperatorView {
+struct OperatorView<const W: usize> {
     /// Plan the quickest path to the goal from now on.
     abort: bool,
     /// Mission time the budget ends at, s (`None`: the vehicle's own budget).
     budget_end_s: Option<f64>,
     /// Waypoints never to plan through.
-    removed: NodeSet,
+    removed: NodeSet<W>,
 }
 
 /// The answer to one command, kept to answer a repeat of it the same way.
@@ -312,9 +315,9 @@ pub struct CutCounters {
 
 /// Everything a re-plan produced, ready to publish.
 #[derive(Clone, Copy, Debug)]
-pub struct PlanResult {
+pub struct PlanResult<const W: usize = DEFAULT_WORDS> {
     /// Route from the vehicle's next node to the goal.
-    pub route: Route,
+    pub route: Route<W>,
     /// Its figures.
     pub eval: RouteEval,
     /// Budget planned for, s.
@@ -341,26 +344,27 @@ pub struct PlanResult {
     pub replan: u32,
 }
 
-/// The planner's state between messages.
-pub struct PlannerCore {
+/// The planner's state between messages, in the capacity class of `W`
+/// words (`64 · W` waypoints).
+pub struct PlannerCore<const W: usize = DEFAULT_WORDS> {
     cfg: ServiceConfig,
-    solver: Box<dyn Solver>,
-    problem: Problem,
-    snapshot: Box<WaypointSnapshot>,
+    solver: Box<dyn Solver<W>>,
+    problem: Problem<W>,
+    snapshot: WaypointSnapshot,
     have_snapshot: bool,
-    vehicle: VehicleView,
-    plan: Option<PlanView>,
+    vehicle: VehicleView<W>,
+    plan: Option<PlanView<W>>,
     pending: Option<Pending>,
     counters: ServiceCounters,
     latency_us: Histogram<u64>,
     answered_state: (u64, u64),
     answered_epoch: u64,
     finished: bool,
-    warm: Route,
+    warm: Route<W>,
     last_state: Box<VehicleState>,
     /// SCHED_FIFO priority the service thread runs at (0: normal scheduling).
     rt_priority: u32,
-    operator: OperatorView,
+    operator: OperatorView<W>,
     /// Answers to the latest commands, a ring.
     recent: [AckRecord; RECENT_COMMANDS],
     recent_next: usize,
@@ -371,9 +375,12 @@ pub struct PlannerCore {
 /// Largest latency the histogram resolves, µs (one minute: anything above is a miss anyway).
 const LATENCY_MAX_US: u64 = 60_000_000;
 
-impl PlannerCore {
+impl<const W: usize> PlannerCore<W> {
+    /// Waypoints the core's class holds.
+    pub const CAPACITY: usize = nodes_of(W);
+
     /// A core with every buffer allocated.
-    pub fn new(cfg: ServiceConfig, solver: Box<dyn Solver>) -> Self {
+    pub fn new(cfg: ServiceConfig, solver: Box<dyn Solver<W>>) -> Self {
         // 3 significant digits over 1 µs..60 s: fixed size, never resized.
         let latency_us =
             Histogram::new_with_bounds(1, LATENCY_MAX_US, 3).unwrap_or_else(|_| Histogram::new(3).unwrap());
@@ -381,7 +388,7 @@ impl PlannerCore {
             cfg,
             solver,
             problem: Problem::new(),
-            snapshot: boxed_zeroed(),
+            snapshot: WaypointSnapshot::new(),
             have_snapshot: false,
             vehicle: VehicleView::default(),
             plan: None,
@@ -434,7 +441,7 @@ impl PlannerCore {
 
     /// The latest snapshot applied, if any.
     pub fn snapshot(&self) -> Option<&WaypointSnapshot> {
-        self.have_snapshot.then_some(&*self.snapshot)
+        self.have_snapshot.then_some(&self.snapshot)
     }
 
     fn trigger(&mut self, kind: TriggerKind, sent_ns: u64, received_ns: u64, mission_time_s: f64) {
@@ -481,7 +488,11 @@ impl PlannerCore {
         *self.last_state = *s;
         let mut visited = NodeSet::EMPTY;
         for &id in auv_messages::msg::route_ids(&s.route, s.route_len) {
-            visited.insert(id as usize);
+            // Ids beyond the class are no waypoint of this network (the
+            // receiver's rules refuse them; never index past the set).
+            if (id as usize) < Self::CAPACITY {
+                visited.insert(id as usize);
+            }
         }
         let prev = self.vehicle;
         self.vehicle = VehicleView {
@@ -545,7 +556,10 @@ impl PlannerCore {
         // A new sender session is a restarted sensor: re-plan on what it
         // reports even when the usual thresholds would not.
         let sensor_back = self.have_snapshot && s.header.session != self.snapshot.header.session;
-        copy_snapshot(s, &mut self.snapshot);
+        if self.snapshot.copy_snapshot(s).is_err() {
+            // Cannot happen: both buffers hold the largest network.
+            return;
+        }
         self.have_snapshot = true;
         self.counters.sensor_updates += 1;
         let trigger = self
@@ -723,7 +737,7 @@ impl PlannerCore {
     }
 
     /// Where the vehicle will be free, its budget from there and what to exclude.
-    fn planning_frame(&self) -> (usize, f64, NodeSet) {
+    fn planning_frame(&self) -> (usize, f64, NodeSet<W>) {
         let v = &self.vehicle;
         let start = v.to_node;
         let mut excluded = v.visited;
@@ -746,7 +760,7 @@ impl PlannerCore {
     }
 
     /// The part of the last plan from the vehicle's next node on.
-    fn remaining_plan(&self) -> Option<(Route, usize)> {
+    fn remaining_plan(&self) -> Option<(Route<W>, usize)> {
         let p = self.plan.as_ref()?;
         let i = p.route.iter().position(|id| id == self.vehicle.to_node)?;
         let mut r = Route::new();
@@ -790,7 +804,7 @@ impl PlannerCore {
     /// Re-plans for the pending trigger, if there is one and enough is known.
     /// Returns the plan to publish; `Err` when no route joins the vehicle and
     /// the goal (the trigger is answered without a plan).
-    pub fn replan(&mut self) -> Option<Result<PlanResult, ProblemError>> {
+    pub fn replan(&mut self) -> Option<Result<PlanResult<W>, ProblemError>> {
         let pending = self.pending?;
         if !self.have_snapshot || !self.vehicle.known {
             return None;
@@ -836,7 +850,7 @@ impl PlannerCore {
         );
         let (route, eval) = self.solver.best();
         let (route, eval) = (*route, *eval);
-        let mut cum_s = [0.0; MAX_NODES];
+        let mut cum_s = PerNode::splat(0.0);
         let mut acc = 0.0;
         for k in (0..route.len().saturating_sub(1)).rev() {
             acc += self.problem.time_s(route.get(k), route.get(k + 1));
@@ -882,7 +896,7 @@ impl PlannerCore {
     }
 
     /// Writes a plan message for `r` (header's mission time included).
-    pub fn fill_plan(&self, r: &PlanResult, m: &mut Plan) {
+    pub fn fill_plan(&self, r: &PlanResult<W>, m: &mut Plan) {
         m.header.mission_time_s = r.mission_time_s.max(0.0);
         m.state_seq = r.state_seq;
         m.snapshot_epoch = r.epoch;
@@ -901,14 +915,12 @@ impl PlannerCore {
         m.fallback = u32::from(!r.eval.feasible);
         m.replan = r.replan;
         m.route_len = r.route.len() as u32;
-        // The service runs the 128-node class, so every id fits a byte.
-        for (slot, &id) in m.route.iter_mut().zip(r.route.ids()) {
-            *slot = id as u8;
-        }
+        let ids = r.route.ids();
+        m.route[..ids.len()].copy_from_slice(ids);
     }
 
     /// Records that the plan for `r` was published at `published_ns`.
-    pub fn published(&mut self, r: &PlanResult, published_ns: u64, events: &mut dyn FnMut(&ServiceEvent)) {
+    pub fn published(&mut self, r: &PlanResult<W>, published_ns: u64, events: &mut dyn FnMut(&ServiceEvent)) {
         // The deadline's latency: trigger arrival → plan published.
         let latency = published_ns.saturating_sub(r.trigger_received_ns);
         self.counters.last_latency_ns = latency;
@@ -923,7 +935,8 @@ impl PlannerCore {
             t: r.mission_time_s,
             replan: r.replan,
             trigger: r.trigger,
-            route: r.route,
+            // Every class fits the largest.
+            route: r.route.to_class().unwrap_or_default(),
             eval: r.eval,
             budget_s: r.budget_s,
             iterations: r.iterations,
@@ -994,8 +1007,8 @@ mod tests {
     use auv_messages::msg::{Header, VehicleEvent};
     use auv_messages::network::write_snapshot;
 
-    fn snapshot(inst: &auv_core::instance::Instance, epoch: u64) -> Box<WaypointSnapshot> {
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
+    fn snapshot(inst: &auv_core::instance::Instance, epoch: u64) -> WaypointSnapshot {
+        let mut s = WaypointSnapshot::new();
         write_snapshot(inst, epoch, &mut s).unwrap();
         s.header = Header {
             seq: epoch + 1,
@@ -1007,7 +1020,7 @@ mod tests {
         s
     }
 
-    fn state(seq: u64, to: u32, arrivals: u32, visited: &[u8], time_left: f64) -> VehicleState {
+    fn state(seq: u64, to: u32, arrivals: u32, visited: &[u16], time_left: f64) -> VehicleState {
         // SAFETY-free: a zeroed state via the message helper.
         let mut s = *boxed_zeroed::<VehicleState>();
         s.header = Header {
@@ -1105,7 +1118,11 @@ mod tests {
         s.mode = VehicleMode::Travelling as u32;
         c.on_state(&s, mono_now_ns(), &mut sink);
         assert!(!c.has_pending());
-        c.on_state(&state(3, next, 1, &[0, next as u8], 18_000.0), mono_now_ns(), &mut sink);
+        c.on_state(
+            &state(3, next, 1, &[0, next as u16], 18_000.0),
+            mono_now_ns(),
+            &mut sink,
+        );
         let r = c.replan().unwrap().unwrap();
         assert_eq!(r.trigger, TriggerKind::Arrival);
         assert_eq!(r.route.get(0), next as usize);
@@ -1160,8 +1177,8 @@ mod tests {
         let mut src = snapshot(&inst, 3);
         src.next_update_s = 240.0;
         src.phi1 = 0.5;
-        let mut dst = boxed_zeroed::<WaypointSnapshot>();
-        copy_snapshot(&src, &mut dst);
+        let mut dst = WaypointSnapshot::new();
+        dst.copy_snapshot(&src).unwrap();
         assert_eq!(dst.header, src.header);
         assert_eq!((dst.epoch, dst.next_update_s, dst.phi1), (3, 240.0, 0.5));
         assert_eq!(
@@ -1176,7 +1193,7 @@ mod tests {
         let (mut c, _) = core_with_first_plan(&inst);
         let mut sink = |_: &ServiceEvent| {};
         let goal = inst.goal as u32;
-        c.on_state(&state(2, goal, 1, &[0, goal as u8], 1_000.0), mono_now_ns(), &mut sink);
+        c.on_state(&state(2, goal, 1, &[0, goal as u16], 1_000.0), mono_now_ns(), &mut sink);
         assert!(!c.has_pending(), "an arrival at the goal needs no plan");
         let mut cut = inst.clone();
         cut.edges.clear();

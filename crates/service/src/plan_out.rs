@@ -15,8 +15,7 @@
 //! cycle the decorator is a pass-through, so the service loop has no
 //! injection branch.
 
-use auv_core::problem::MAX_NODES;
-use auv_messages::msg::{Plan, WaypointSnapshot, boxed_zeroed};
+use auv_messages::msg::{MAX_WIRE_NODES, Plan, WaypointSnapshot, WireId, boxed_zeroed, route_ids};
 use auv_messages::wire::{FaultCycle, bad_route};
 use auv_transport::{Outbox, TransportError};
 
@@ -26,7 +25,7 @@ pub struct PlanContext<'a> {
     /// The waypoint snapshot in force (`None` before the first).
     pub snapshot: Option<&'a WaypointSnapshot>,
     /// The vehicle's route so far, node ids (empty before its first state).
-    pub visited: &'a [u8],
+    pub visited: &'a [WireId],
 }
 
 /// Where the service publishes its plans.
@@ -54,9 +53,11 @@ impl<O: Outbox<Plan>> PlanOutbox for O {
 pub struct FaultyPlans<O> {
     inner: O,
     faults: FaultCycle,
-    /// The good plan, filled once more to read its route (allocated here,
-    /// not per plan: the service's steady state allocates nothing).
+    /// The good plan, filled once more to read its route, and the bad
+    /// plan's route (allocated here, not per plan: the service's steady
+    /// state allocates nothing).
     scratch: Box<Plan>,
+    bad: Box<[WireId; MAX_WIRE_NODES]>,
 }
 
 impl<O> FaultyPlans<O> {
@@ -67,6 +68,7 @@ impl<O> FaultyPlans<O> {
             inner,
             faults,
             scratch: boxed_zeroed::<Plan>(),
+            bad: Box::new([0; MAX_WIRE_NODES]),
         }
     }
 
@@ -80,16 +82,12 @@ impl<O: Outbox<Plan>> PlanOutbox for FaultyPlans<O> {
     fn publish_plan(&mut self, ctx: PlanContext<'_>, fill: &mut dyn FnMut(&mut Plan)) -> Result<u64, TransportError> {
         if let (Some(fault), Some(snap)) = (self.faults.advance(), ctx.snapshot) {
             fill(&mut self.scratch);
-            let len = (self.scratch.route_len as usize).min(MAX_NODES);
-            let mut good = [0u16; MAX_NODES];
-            for (g, &id) in good.iter_mut().zip(&self.scratch.route[..len]) {
-                *g = u16::from(id);
-            }
-            let mut bad = [0u8; MAX_NODES];
-            if let Some(len) = bad_route(fault, &good[..len], snap, ctx.visited, &mut bad) {
+            let good = route_ids(&self.scratch.route, self.scratch.route_len);
+            if let Some(len) = bad_route(fault, good, snap, ctx.visited, &mut self.bad) {
+                let bad = &self.bad[..len];
                 self.inner.publish(&mut |m: &mut Plan| {
                     fill(m);
-                    m.route = bad;
+                    m.route[..len].copy_from_slice(bad);
                     m.route_len = len as u32;
                 })?;
             }
@@ -112,7 +110,7 @@ mod tests {
     /// Records the routes that would have been sent.
     #[derive(Default)]
     struct Recorder {
-        sent: Vec<Vec<u8>>,
+        sent: Vec<Vec<WireId>>,
     }
 
     impl Outbox<Plan> for Recorder {
@@ -126,7 +124,7 @@ mod tests {
     }
 
     /// A good route 0 → goal, as the service would fill it.
-    fn good(goal: u8) -> impl FnMut(&mut Plan) {
+    fn good(goal: WireId) -> impl FnMut(&mut Plan) {
         move |m: &mut Plan| {
             m.route[0] = 0;
             m.route[1] = goal;
@@ -149,9 +147,9 @@ mod tests {
     #[test]
     fn each_bad_plan_goes_before_its_good_one_and_breaks_the_rule_it_names() {
         let inst = random_instance(15, 0.4, 20_000.0, 3);
-        let mut snap = boxed_zeroed::<WaypointSnapshot>();
+        let mut snap = WaypointSnapshot::new();
         write_snapshot(&inst, 0, &mut snap).unwrap();
-        let goal = inst.goal as u8;
+        let goal = inst.goal as WireId;
         let faults = FaultCycle::parse("--inject-plan", "all", &PLAN_FAULTS).unwrap();
         let mut out = FaultyPlans::new(Recorder::default(), faults);
         // Nothing visited at first: the visited-node fault cannot be built
@@ -160,7 +158,7 @@ mod tests {
             snapshot: Some(&snap),
             visited: &[],
         };
-        let visited = [0u8, 7, 3];
+        let visited: [WireId; 3] = [0, 7, 3];
         let mut seqs = Vec::new();
         for k in 0..4 {
             if k == 2 {

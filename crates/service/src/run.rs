@@ -82,7 +82,12 @@ where
         r
     }
 
-    fn publish_acks(&mut self, core: &mut PlannerCore, plan_seq: u64, replan: u32) -> Result<(), TransportError> {
+    fn publish_acks<const K: usize>(
+        &mut self,
+        core: &mut PlannerCore<K>,
+        plan_seq: u64,
+        replan: u32,
+    ) -> Result<(), TransportError> {
         let acks = &mut self.acks;
         let mut result = Ok(());
         let t = core.mission_time_s();
@@ -94,7 +99,7 @@ where
         result
     }
 
-    fn publish_status(&mut self, core: &PlannerCore) -> Result<(), TransportError> {
+    fn publish_status<const K: usize>(&mut self, core: &PlannerCore<K>) -> Result<(), TransportError> {
         let rejected = self.rejected();
         self.status
             .publish(&mut |m: &mut PlannerStatus| core.fill_status(&rejected, m))?;
@@ -103,12 +108,13 @@ where
 }
 
 /// Runs the service until the mission ends, a signal arrives, or
-/// `keep_going` returns false (checked once per wake-up).
-pub fn run_service<W, IS, IW, OP, OS, IC, OA>(
-    core: &mut PlannerCore,
+/// `keep_going` returns false (checked once per wake-up). The core's
+/// capacity class `K` is the mission's; the ports do not depend on it.
+pub fn run_service<W, IS, IW, OP, OS, IC, OA, const K: usize>(
+    core: &mut PlannerCore<K>,
     ports: &mut PlannerPorts<W, IS, IW, OP, OS, IC, OA>,
     events: &mut dyn FnMut(&ServiceEvent),
-    keep_going: &mut dyn FnMut(&PlannerCore) -> bool,
+    keep_going: &mut dyn FnMut(&PlannerCore<K>) -> bool,
 ) -> Result<ExitReason, TransportError>
 where
     W: Waker,
@@ -128,11 +134,11 @@ where
     exit
 }
 
-fn service_loop<W, IS, IW, OP, OS, IC, OA>(
-    core: &mut PlannerCore,
+fn service_loop<W, IS, IW, OP, OS, IC, OA, const K: usize>(
+    core: &mut PlannerCore<K>,
     ports: &mut PlannerPorts<W, IS, IW, OP, OS, IC, OA>,
     events: &mut dyn FnMut(&ServiceEvent),
-    keep_going: &mut dyn FnMut(&PlannerCore) -> bool,
+    keep_going: &mut dyn FnMut(&PlannerCore<K>) -> bool,
     warmup: u64,
 ) -> Result<ExitReason, TransportError>
 where
@@ -236,14 +242,14 @@ mod tests {
         let mut ports = PlannerPorts {
             waker: ctx.waker(Role::Planner).unwrap(),
             states: Guarded::new(ctx.inbox::<VehicleState>().unwrap(), fp, "planner"),
-            snapshots: Guarded::new(ctx.inbox::<WaypointSnapshot>().unwrap(), fp, "planner"),
+            snapshots: Guarded::new(ctx.snapshot_inbox().unwrap(), fp, "planner"),
             plans: ctx.outbox::<Plan>(Stamp::new(fp)).unwrap(),
             status: ctx.outbox::<PlannerStatus>(Stamp::new(fp)).unwrap(),
             commands: Guarded::new(ctx.inbox::<OperatorCommand>().unwrap(), fp, "planner"),
             acks: ctx.outbox::<CommandAck>(Stamp::new(fp)).unwrap(),
         };
         // The peers: a sensor, a vehicle, and one foreign sender.
-        let mut snap_out = ctx.outbox::<WaypointSnapshot>(Stamp::new(fp)).unwrap();
+        let mut snap_out = ctx.snapshot_outbox(Stamp::new(fp), 15).unwrap();
         let mut state_out = ctx.outbox::<VehicleState>(Stamp::new(fp)).unwrap();
         let mut foreign = ctx.outbox::<VehicleState>(Stamp::new(fp + 1)).unwrap();
         let mut plans_in = ctx.inbox::<Plan>().unwrap();
@@ -263,7 +269,7 @@ mod tests {
             iterations: 10,
             ..ServiceConfig::default()
         };
-        let mut core = PlannerCore::new(cfg, Box::new(RandomKeySearch::new(5)));
+        let mut core: PlannerCore = PlannerCore::new(cfg, Box::new(RandomKeySearch::new(5)));
         let mut rounds = 0;
         let exit = run_service(&mut core, &mut ports, &mut |_| {}, &mut |c| {
             rounds += 1;

@@ -29,11 +29,12 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
+use iceoryx2::service::builder::publish_subscribe::Builder as PubSubBuilder;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 
-use super::{Inbox, IpcOptions, OnTopic, Outbox, Role, SetupError, TransportError, WaitMode, Wake, Waker};
-use auv_messages::msg::zero_in_place;
+use super::{Inbox, IpcOptions, OnTopic, Outbox, Role, SetupError, Topic, TransportError, WaitMode, Wake, Waker};
+use auv_messages::msg::{FixedMessage, Message, SnapshotHead, WaypointSnapshot, WireEdge, zero_in_place};
 use auv_platform::{clock, signal};
 
 /// Shared-memory service flavour (between processes): what the binaries use.
@@ -103,6 +104,24 @@ pub fn wake_qos() -> WakeQos {
         max_notifiers: WAKE_MAX_NOTIFIERS,
         max_listeners: WAKE_MAX_LISTENERS,
     }
+}
+
+/// Sets a topic's QoS on a publish-subscribe service builder (one place for
+/// the fixed-size topics and the snapshot's slice topic).
+fn with_qos<
+    P: core::fmt::Debug + iceoryx2::prelude::IceoryxSend + ?Sized,
+    H: core::fmt::Debug + ZeroCopySend,
+    S: Service,
+>(
+    b: PubSubBuilder<P, H, S>,
+    q: &TopicQos,
+) -> PubSubBuilder<P, H, S> {
+    b.history_size(q.history_size)
+        .subscriber_max_buffer_size(q.subscriber_max_buffer_size)
+        .subscriber_max_borrowed_samples(q.subscriber_max_borrowed_samples)
+        .enable_safe_overflow(q.enable_safe_overflow)
+        .max_publishers(q.max_publishers)
+        .max_subscribers(q.max_subscribers)
 }
 
 fn iox(step: impl Into<String>, cause: impl core::fmt::Debug) -> SetupError {
@@ -183,18 +202,28 @@ impl<S: Service> IpcContext<S> {
         ServiceName::new(s).map_err(|e| iox(format!("name service {s:?}"), e))
     }
 
-    fn pubsub<T: OnTopic>(&self) -> Result<PubSubFactory<S, T, ()>, SetupError> {
+    fn pubsub<T: OnTopic + FixedMessage>(&self) -> Result<PubSubFactory<S, T, ()>, SetupError> {
         let name = self.opts.service_name(T::TOPIC);
         let q = topic_qos(T::TOPIC);
-        self.node
+        let builder = self
+            .node
             .service_builder(&self.service_name(&name)?)
-            .publish_subscribe::<T>()
-            .history_size(q.history_size)
-            .subscriber_max_buffer_size(q.subscriber_max_buffer_size)
-            .subscriber_max_borrowed_samples(q.subscriber_max_borrowed_samples)
-            .enable_safe_overflow(q.enable_safe_overflow)
-            .max_publishers(q.max_publishers)
-            .max_subscribers(q.max_subscribers)
+            .publish_subscribe::<T>();
+        with_qos(builder, &q)
+            .open_or_create()
+            .map_err(|e| iox(format!("open service {name}"), e))
+    }
+
+    /// The snapshot topic: a slice of edges behind a [`SnapshotHead`] user header.
+    fn snapshot_pubsub(&self) -> Result<SnapshotFactory<S>, SetupError> {
+        let name = self.opts.service_name(Topic::Waypoints);
+        let q = topic_qos(Topic::Waypoints);
+        let builder = self
+            .node
+            .service_builder(&self.service_name(&name)?)
+            .publish_subscribe::<[WireEdge]>()
+            .user_header::<SnapshotHead>();
+        with_qos(builder, &q)
             .open_or_create()
             .map_err(|e| iox(format!("open service {name}"), e))
     }
@@ -212,39 +241,87 @@ impl<S: Service> IpcContext<S> {
             .map_err(|e| iox(format!("open event service {name}"), e))
     }
 
-    /// A publisher of `T`'s topic that wakes the topic's consumers.
-    pub fn outbox<T: OnTopic>(&self, stamp: Stamp) -> Result<IpcOutbox<S, T>, SetupError> {
-        let service = self.pubsub::<T>()?;
-        let publisher = service
-            .publisher_builder()
-            .max_loaned_samples(1)
-            .create()
-            .map_err(|e| iox(format!("create publisher on {}", T::TOPIC.leaf()), e))?;
+    /// The notifiers that wake `topic`'s consumers (none in spin mode).
+    fn wake_ups(&self, topic: Topic) -> Result<WakeUps<S>, SetupError> {
         let mut notifiers = Vec::new();
-        let mut wake_services = Vec::new();
+        let mut services = Vec::new();
         if self.opts.mode == WaitMode::Event {
-            for &role in T::TOPIC.consumers() {
+            for &role in topic.consumers() {
                 let ev = self.wake_service(role)?;
                 notifiers.push(
                     ev.notifier_builder()
                         .create()
                         .map_err(|e| iox(format!("create notifier for {}", role.as_str()), e))?,
                 );
-                wake_services.push(ev);
+                services.push(ev);
             }
         }
+        Ok(WakeUps {
+            notifiers,
+            _services: services,
+            id: EventId::new(topic.event_id()),
+            topic: topic.leaf(),
+        })
+    }
+
+    /// A publisher of `T`'s topic that wakes the topic's consumers.
+    pub fn outbox<T: OnTopic + FixedMessage>(&self, stamp: Stamp) -> Result<IpcOutbox<S, T>, SetupError> {
+        let service = self.pubsub::<T>()?;
+        let publisher = service
+            .publisher_builder()
+            .max_loaned_samples(1)
+            .create()
+            .map_err(|e| iox(format!("create publisher on {}", T::TOPIC.leaf()), e))?;
         Ok(IpcOutbox {
             publisher,
-            notifiers,
-            _services: (service, wake_services),
+            wake: self.wake_ups(T::TOPIC)?,
+            _service: service,
             stamp,
             seq: 0,
         })
     }
 
+    /// A publisher of snapshots of networks of up to `max_nodes` waypoints:
+    /// its samples hold every pair's edge of such a network and no more, so
+    /// a snapshot's shared memory grows with the mission, not with the
+    /// largest network the build supports.
+    pub fn snapshot_outbox(&self, stamp: Stamp, max_nodes: usize) -> Result<IpcSnapshotOutbox<S>, SetupError> {
+        let max_edges = auv_messages::network::max_edges_of(max_nodes.min(auv_messages::msg::MAX_WIRE_NODES)).max(1);
+        let service = self.snapshot_pubsub()?;
+        let publisher = service
+            .publisher_builder()
+            .max_loaned_samples(1)
+            .initial_max_slice_len(max_edges)
+            .create()
+            .map_err(|e| iox(format!("create publisher on {}", Topic::Waypoints.leaf()), e))?;
+        Ok(IpcSnapshotOutbox {
+            publisher,
+            wake: self.wake_ups(Topic::Waypoints)?,
+            _service: service,
+            staging: WaypointSnapshot::with_capacity(max_edges),
+            stamp,
+            seq: 0,
+        })
+    }
+
+    /// A subscriber of the snapshot topic; it copies each sample into a
+    /// buffer that holds the largest network the build supports.
+    pub fn snapshot_inbox(&self) -> Result<IpcSnapshotInbox<S>, SetupError> {
+        let service = self.snapshot_pubsub()?;
+        let subscriber = service
+            .subscriber_builder()
+            .create()
+            .map_err(|e| iox(format!("create subscriber on {}", Topic::Waypoints.leaf()), e))?;
+        Ok(IpcSnapshotInbox {
+            subscriber,
+            _service: service,
+            staging: WaypointSnapshot::new(),
+        })
+    }
+
     /// A subscriber of `T`'s topic. It receives the latest sample already
     /// published, if any and if the topic keeps history.
-    pub fn inbox<T: OnTopic>(&self) -> Result<IpcInbox<S, T>, SetupError> {
+    pub fn inbox<T: OnTopic + FixedMessage>(&self) -> Result<IpcInbox<S, T>, SetupError> {
         let service = self.pubsub::<T>()?;
         let subscriber = service
             .subscriber_builder()
@@ -275,16 +352,48 @@ impl<S: Service> IpcContext<S> {
     }
 }
 
-/// iceoryx2 publisher of one topic plus the notifiers of its consumers.
-pub struct IpcOutbox<S: Service, T: OnTopic> {
-    publisher: Publisher<S, T, ()>,
+/// The snapshot topic's service: edges as the payload slice, the rest in the user header.
+type SnapshotFactory<S> = PubSubFactory<S, [WireEdge], SnapshotHead>;
+
+/// The notifiers of one topic's consumers.
+struct WakeUps<S: Service> {
     notifiers: Vec<Notifier<S>>,
-    _services: (PubSubFactory<S, T, ()>, Vec<EventFactory<S>>),
+    _services: Vec<EventFactory<S>>,
+    id: EventId,
+    topic: &'static str,
+}
+
+impl<S: Service> WakeUps<S> {
+    fn notify(&self) -> Result<(), TransportError> {
+        for n in &self.notifiers {
+            n.notify_with_custom_event_id(self.id)
+                .map_err(|_| TransportError::Notify { topic: self.topic })?;
+        }
+        Ok(())
+    }
+}
+
+/// Stamps the rest of a filled message's header: sequence number, session,
+/// fingerprint, send time.
+fn stamp_header<T: Message>(m: &mut T, stamp: &Stamp, seq: &mut u64) {
+    *seq += 1;
+    let h = m.header_mut();
+    h.seq = *seq;
+    h.session = stamp.session;
+    h.fingerprint = stamp.fingerprint;
+    h.sent_mono_ns = clock::mono_now_ns();
+}
+
+/// iceoryx2 publisher of one topic plus the notifiers of its consumers.
+pub struct IpcOutbox<S: Service, T: OnTopic + FixedMessage> {
+    publisher: Publisher<S, T, ()>,
+    wake: WakeUps<S>,
+    _service: PubSubFactory<S, T, ()>,
     stamp: Stamp,
     seq: u64,
 }
 
-impl<S: Service, T: OnTopic> crate::faulty::TamperOutbox<T> for IpcOutbox<S, T> {
+impl<S: Service, T: OnTopic + FixedMessage> crate::faulty::TamperOutbox<T> for IpcOutbox<S, T> {
     fn publish_tampered(
         &mut self,
         fill: &mut dyn FnMut(&mut T),
@@ -294,7 +403,7 @@ impl<S: Service, T: OnTopic> crate::faulty::TamperOutbox<T> for IpcOutbox<S, T> 
     }
 }
 
-impl<S: Service, T: OnTopic> IpcOutbox<S, T> {
+impl<S: Service, T: OnTopic + FixedMessage> IpcOutbox<S, T> {
     fn send_one(
         &mut self,
         fill: &mut dyn FnMut(&mut T),
@@ -313,26 +422,17 @@ impl<S: Service, T: OnTopic> IpcOutbox<S, T> {
         };
         let m = sample.payload_mut();
         fill(m);
-        self.seq += 1;
-        let h = m.header_mut();
-        h.seq = self.seq;
-        h.session = self.stamp.session;
-        h.fingerprint = self.stamp.fingerprint;
-        h.sent_mono_ns = clock::mono_now_ns();
+        stamp_header(m, &self.stamp, &mut self.seq);
         if let Some(t) = tamper {
             t(m);
         }
         sample.send().map_err(|_| TransportError::Send { topic })?;
-        let id = EventId::new(T::TOPIC.event_id());
-        for n in &self.notifiers {
-            n.notify_with_custom_event_id(id)
-                .map_err(|_| TransportError::Notify { topic })?;
-        }
+        self.wake.notify()?;
         Ok(self.seq)
     }
 }
 
-impl<S: Service, T: OnTopic> Outbox<T> for IpcOutbox<S, T> {
+impl<S: Service, T: OnTopic + FixedMessage> Outbox<T> for IpcOutbox<S, T> {
     fn publish(&mut self, fill: &mut dyn FnMut(&mut T)) -> Result<u64, TransportError> {
         self.send_one(fill, None)
     }
@@ -343,14 +443,99 @@ impl<S: Service, T: OnTopic> Outbox<T> for IpcOutbox<S, T> {
     }
 }
 
+/// iceoryx2 publisher of snapshots: the process fills a held snapshot,
+/// which is then copied into a sample of exactly its edges.
+pub struct IpcSnapshotOutbox<S: Service> {
+    publisher: Publisher<S, [WireEdge], SnapshotHead>,
+    wake: WakeUps<S>,
+    _service: SnapshotFactory<S>,
+    staging: WaypointSnapshot,
+    stamp: Stamp,
+    seq: u64,
+}
+
+impl<S: Service> IpcSnapshotOutbox<S> {
+    fn send_one(
+        &mut self,
+        fill: &mut dyn FnMut(&mut WaypointSnapshot),
+        tamper: Option<&mut dyn FnMut(&mut WaypointSnapshot)>,
+    ) -> Result<u64, TransportError> {
+        let topic = Topic::Waypoints.leaf();
+        self.staging.clear();
+        fill(&mut self.staging);
+        stamp_header(&mut self.staging, &self.stamp, &mut self.seq);
+        if let Some(t) = tamper {
+            t(&mut self.staging);
+        }
+        let edges = self.staging.edges_in_use();
+        let mut sample = self
+            .publisher
+            .loan_slice_uninit(edges.len())
+            .map_err(|_| TransportError::Loan { topic })?;
+        *sample.user_header_mut() = *self.staging.head();
+        let sample = sample.write_from_slice(edges);
+        sample.send().map_err(|_| TransportError::Send { topic })?;
+        self.wake.notify()?;
+        Ok(self.seq)
+    }
+}
+
+impl<S: Service> crate::faulty::TamperOutbox<WaypointSnapshot> for IpcSnapshotOutbox<S> {
+    fn publish_tampered(
+        &mut self,
+        fill: &mut dyn FnMut(&mut WaypointSnapshot),
+        tamper: &mut dyn FnMut(&mut WaypointSnapshot),
+    ) -> Result<u64, TransportError> {
+        self.send_one(fill, Some(tamper))
+    }
+}
+
+impl<S: Service> Outbox<WaypointSnapshot> for IpcSnapshotOutbox<S> {
+    fn publish(&mut self, fill: &mut dyn FnMut(&mut WaypointSnapshot)) -> Result<u64, TransportError> {
+        self.send_one(fill, None)
+    }
+
+    fn refresh(&mut self) {
+        let _ = self.publisher.update_connections();
+    }
+}
+
+/// iceoryx2 subscriber of snapshots.
+pub struct IpcSnapshotInbox<S: Service> {
+    subscriber: Subscriber<S, [WireEdge], SnapshotHead>,
+    _service: SnapshotFactory<S>,
+    staging: WaypointSnapshot,
+}
+
+impl<S: Service> Inbox<WaypointSnapshot> for IpcSnapshotInbox<S> {
+    fn drain(&mut self, each: &mut dyn FnMut(&WaypointSnapshot)) -> Result<usize, TransportError> {
+        let mut n = 0;
+        loop {
+            match self.subscriber.receive() {
+                Ok(Some(sample)) => {
+                    self.staging.receive(sample.user_header(), sample.payload());
+                    each(&self.staging);
+                    n += 1;
+                }
+                Ok(None) => return Ok(n),
+                Err(_) => {
+                    return Err(TransportError::Receive {
+                        topic: Topic::Waypoints.leaf(),
+                    });
+                }
+            }
+        }
+    }
+}
+
 /// iceoryx2 subscriber of one topic.
-pub struct IpcInbox<S: Service, T: OnTopic> {
+pub struct IpcInbox<S: Service, T: OnTopic + FixedMessage> {
     subscriber: Subscriber<S, T, ()>,
     _service: PubSubFactory<S, T, ()>,
     _t: PhantomData<T>,
 }
 
-impl<S: Service, T: OnTopic> Inbox<T> for IpcInbox<S, T> {
+impl<S: Service, T: OnTopic + FixedMessage> Inbox<T> for IpcInbox<S, T> {
     fn drain(&mut self, each: &mut dyn FnMut(&T)) -> Result<usize, TransportError> {
         let mut n = 0;
         loop {

@@ -20,17 +20,16 @@ use iceoryx2::prelude::ZeroCopySend;
 use serde_json::{Value, json};
 
 use crate::{OnTopic, Role, Topic};
-use auv_core::problem::MAX_NODES;
 use auv_messages::msg::{
-    AckStatus, AllocCounters, CommandAck, CommandKind, Header, MAX_EDGES, NO_NODE, ObjectiveCode, OperatorCommand,
-    Outcome, Plan, PlannerPhase, PlannerStatus, REJECT_KINDS, RefuseReason, RejectKind, TriggerKind, VehicleEvent,
-    VehicleMode, VehicleState, WIRE_VERSION, WaypointSnapshot, WireEdge, WireNode,
+    AckStatus, AllocCounters, CommandAck, CommandKind, Header, MAX_WIRE_EDGES, MAX_WIRE_NODES, NO_NODE, ObjectiveCode,
+    OperatorCommand, Outcome, Plan, PlannerPhase, PlannerStatus, REJECT_KINDS, RefuseReason, RejectKind, SnapshotHead,
+    TriggerKind, VehicleEvent, VehicleMode, VehicleState, WIRE_VERSION, WaypointSnapshot, WireEdge, WireNode,
 };
 
 /// A type as it appears in a field.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum WireType {
-    /// A number: `u8`, `u32`, `u64` or `f64`.
+    /// A number: `u8`, `u16`, `u32`, `u64` or `f64`.
     Scalar(&'static str),
     /// A nested struct of [`structs`], by name.
     Struct(&'static str),
@@ -66,7 +65,7 @@ macro_rules! scalar {
         fn wire_type() -> WireType { WireType::Scalar(stringify!($t)) }
     })+ };
 }
-scalar!(u8, u32, u64, f64);
+scalar!(u8, u16, u32, u64, f64);
 
 impl<T: Described, const N: usize> Described for [T; N] {
     fn wire_type() -> WireType {
@@ -92,7 +91,7 @@ pub struct FieldLayout {
 pub struct StructLayout {
     /// Rust name.
     pub name: &'static str,
-    /// iceoryx2 type name (`auv.Plan.v2`) of a message; `None` for a nested struct.
+    /// iceoryx2 type name (`auv.Plan.v3`) of a payload or user header; `None` for a nested struct.
     pub type_name: Option<&'static str>,
     /// `size_of`, bytes.
     pub size: usize,
@@ -147,7 +146,6 @@ pub fn structs() -> Vec<StructLayout> {
     vec![
         layout!(Header, None, [seq, session, fingerprint, sent_mono_ns, mission_time_s]),
         layout!(WireNode, None, [x, y, z, prize]),
-        layout!(WireEdge, None, [a, b, priority, risk, task_time_s]),
         layout!(
             AllocCounters,
             None,
@@ -165,13 +163,15 @@ pub fn structs() -> Vec<StructLayout> {
     ]
 }
 
-/// The messages of the six mission topics (the latency bench's raw
-/// ping/pong are internal and not listed).
+/// What travels on the six mission topics (the latency bench's raw
+/// ping/pong are internal and not listed): the snapshot's head (its user
+/// header) and edge (its payload slice's element), then one payload per
+/// other topic.
 pub fn messages() -> Vec<StructLayout> {
     vec![
         layout!(
-            WaypointSnapshot,
-            type_name_of::<WaypointSnapshot>(),
+            SnapshotHead,
+            type_name_of::<SnapshotHead>(),
             [
                 header,
                 epoch,
@@ -187,8 +187,12 @@ pub fn messages() -> Vec<StructLayout> {
                 goal,
                 _pad,
                 nodes,
-                edges,
             ]
+        ),
+        layout!(
+            WireEdge,
+            type_name_of::<WireEdge>(),
+            [a, b, priority, risk, task_time_s]
         ),
         layout!(
             VehicleState,
@@ -304,14 +308,29 @@ fn struct_json(s: &StructLayout) -> Value {
     json!({"name": s.name, "type_name": s.type_name, "size": s.size, "align": s.align, "fields": fields})
 }
 
+/// How a topic's samples are built: one fixed payload and no user header,
+/// or (the snapshot) a slice of a payload type behind a user header.
 fn topic_json<T: OnTopic>() -> Value {
+    let none = json!({"type_name": "()", "size": 0, "align": 1});
+    let (payload, type_name, user_header) = if T::TOPIC == Topic::Waypoints {
+        let head = json!({
+            "type_name": type_name_of::<SnapshotHead>(),
+            "size": size_of::<SnapshotHead>(),
+            "align": align_of::<SnapshotHead>(),
+        });
+        ("slice", type_name_of::<WireEdge>(), head)
+    } else {
+        ("struct", Some(T::type_name()), none)
+    };
     let t = T::TOPIC;
     let q = crate::ipc::topic_qos(t);
     json!({
         "leaf": t.leaf(),
         "service": format!("auv/<vehicle>/{}", t.leaf()),
         "message": T::NAME,
-        "type_name": type_name_of::<T>(),
+        "payload": payload,
+        "type_name": type_name,
+        "user_header": user_header,
         "event_id": t.event_id(),
         "consumers": t.consumers().iter().map(|r| r.as_str()).collect::<Vec<_>>(),
         "qos": {
@@ -342,8 +361,8 @@ pub fn wire_layout_json() -> Value {
         "format": "auv-wire-layout/1",
         "wire_version": WIRE_VERSION,
         "constants": {
-            "MAX_NODES": MAX_NODES,
-            "MAX_EDGES": MAX_EDGES,
+            "MAX_WIRE_NODES": MAX_WIRE_NODES,
+            "MAX_WIRE_EDGES": MAX_WIRE_EDGES,
             "REJECT_KINDS": REJECT_KINDS,
             "NO_NODE": NO_NODE,
         },
@@ -395,7 +414,6 @@ pub fn wire_layout_json() -> Value {
             "max_notifiers": w.max_notifiers,
             "max_listeners": w.max_listeners,
         },
-        "user_header": {"type_name": "()", "size": 0, "align": 1},
     })
 }
 
@@ -435,6 +453,7 @@ mod tests {
     fn element_size(ty: &WireType, all: &[StructLayout]) -> usize {
         match ty {
             WireType::Scalar("u8") => 1,
+            WireType::Scalar("u16") => 2,
             WireType::Scalar("u32") => 4,
             WireType::Scalar("u64" | "f64") => 8,
             WireType::Scalar(other) => panic!("unknown scalar {other}"),
@@ -471,9 +490,10 @@ mod tests {
         assert_eq!(
             names,
             [
-                "auv.WaypointSnapshot.v1",
-                "auv.VehicleState.v2",
-                "auv.Plan.v2",
+                "auv.WaypointSnapshot.v2",
+                "auv.WireEdge.v1",
+                "auv.VehicleState.v3",
+                "auv.Plan.v3",
                 "auv.PlannerStatus.v4",
                 "auv.OperatorCommand.v1",
                 "auv.CommandAck.v1"
@@ -491,10 +511,15 @@ mod tests {
             assert_eq!(j["leaf"], t.leaf());
             assert!(j["qos"]["max_subscribers"].as_u64().unwrap_or(0) as usize >= t.consumers().len() + 2);
         }
-        let plan = &v["messages"][2];
+        let plan = &v["messages"][3];
         assert_eq!(plan["name"], "Plan");
-        assert_eq!(plan["fields"][19]["type"], format!("[u8; {MAX_NODES}]"));
-        assert_eq!(plan["fields"][19]["len"], MAX_NODES);
+        assert_eq!(plan["fields"][19]["type"], format!("[u16; {MAX_WIRE_NODES}]"));
+        assert_eq!(plan["fields"][19]["len"], MAX_WIRE_NODES);
+        let waypoints = &topics[0];
+        assert_eq!(waypoints["payload"], "slice");
+        assert_eq!(waypoints["type_name"], "auv.WireEdge.v1");
+        assert_eq!(waypoints["user_header"]["type_name"], "auv.WaypointSnapshot.v2");
+        assert_eq!(topics[2]["user_header"]["type_name"], "()");
         assert_eq!(v["enums"]["RejectKind"]["visited_node"], 11);
     }
 }

@@ -16,9 +16,9 @@
 //!
 //! | topic | service name | from → to |
 //! |---|---|---|
-//! | waypoints | `auv/<vehicle>/sensor/waypoints/v1` | sensor → planner, vehicle |
-//! | vehicle state | `auv/<vehicle>/vehicle/state/v2` | vehicle → planner, sensor |
-//! | plan | `auv/<vehicle>/planner/plan/v2` | planner → vehicle |
+//! | waypoints | `auv/<vehicle>/sensor/waypoints/v2` | sensor → planner, vehicle |
+//! | vehicle state | `auv/<vehicle>/vehicle/state/v3` | vehicle → planner, sensor |
+//! | plan | `auv/<vehicle>/planner/plan/v3` | planner → vehicle |
 //! | planner status | `auv/<vehicle>/planner/status/v4` | planner → vehicle |
 //! | operator command | `auv/<vehicle>/operator/command/v1` | shore link → planner |
 //! | command ack | `auv/<vehicle>/planner/ack/v1` | planner → shore link |
@@ -63,9 +63,9 @@ impl Topic {
     /// Service name below `auv/<vehicle>/`.
     pub fn leaf(self) -> &'static str {
         match self {
-            Self::Waypoints => "sensor/waypoints/v1",
-            Self::VehicleState => "vehicle/state/v2",
-            Self::Plan => "planner/plan/v2",
+            Self::Waypoints => "sensor/waypoints/v2",
+            Self::VehicleState => "vehicle/state/v3",
+            Self::Plan => "planner/plan/v3",
             Self::Status => "planner/status/v4",
             Self::Command => "operator/command/v1",
             Self::Ack => "planner/ack/v1",
@@ -121,7 +121,7 @@ impl Topic {
     /// Samples a subscriber queues before the oldest is overwritten. Plans
     /// come in bursts (a re-plan per sensor update at 1000× real time and
     /// more) and each one matters to an observer counting them, so their
-    /// queue is deep (a plan is 280 B); the state topics keep only the
+    /// queue is deep (a plan is 1.2 KiB); the state topics keep only the
     /// freshest values.
     pub fn subscriber_buffer(self) -> usize {
         match self {
@@ -448,8 +448,8 @@ mod tests {
     #[test]
     fn service_names_are_versioned_and_namespaced() {
         let o = IpcOptions::new(Some("t_"), "auv1", WaitMode::Event).unwrap();
-        assert_eq!(o.service_name(Topic::Waypoints), "auv/auv1/sensor/waypoints/v1");
-        assert_eq!(o.service_name(Topic::Plan), "auv/auv1/planner/plan/v2");
+        assert_eq!(o.service_name(Topic::Waypoints), "auv/auv1/sensor/waypoints/v2");
+        assert_eq!(o.service_name(Topic::Plan), "auv/auv1/planner/plan/v3");
         assert_eq!(o.wake_name(Role::Planner), "auv/auv1/planner/wake/v1");
     }
 

@@ -12,12 +12,13 @@ use auv_core::decode::Decoder;
 use auv_core::problem::{MAX_NODES, NodeSet, Problem};
 use auv_core::route::Route;
 use auv_messages::msg::{
-    FromCode, Header, MAX_EDGES, Message, ObjectiveCode, Plan, PlannerPhase, PlannerStatus, REJECT_KINDS, RejectKind,
-    SeqGuard, TriggerKind, Validate, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, boxed_zeroed,
-    route_ids,
+    FromCode, Header, MAX_WIRE_NODES, ObjectiveCode, Plan, PlannerPhase, PlannerStatus, REJECT_KINDS, RejectKind,
+    SeqGuard, SnapshotHead, TriggerKind, Validate, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, WireEdge,
+    boxed_zeroed, route_ids,
 };
 use auv_messages::network::{fill_problem, find_edge, write_snapshot};
 use auv_messages::wire::WireRules;
+use auv_transport::Outbox;
 use auv_transport::faulty::TamperOutbox;
 use auv_transport::guard::Guarded;
 use auv_transport::ipc::{InProcess, IpcContext, Stamp};
@@ -35,8 +36,8 @@ const N: usize = 16;
 struct Fixture {
     world: MissionWorld,
     rules: WireRules,
-    /// Real snapshots of epochs 0..8.
-    snaps: Vec<Box<WaypointSnapshot>>,
+    /// Real snapshots of epochs 0..8, in their wire form: head and edges.
+    snaps: Vec<(Box<SnapshotHead>, Vec<WireEdge>)>,
 }
 
 fn fixture() -> &'static Fixture {
@@ -54,11 +55,11 @@ fn fixture() -> &'static Fixture {
             if epoch > 0 {
                 w.redraw(epoch);
             }
-            let mut s = boxed_zeroed::<WaypointSnapshot>();
+            let mut s = WaypointSnapshot::new();
             write_snapshot(&w.snapshot(), epoch, &mut s).expect("the world fits a snapshot");
             s.header.seq = epoch + 1;
             s.header.fingerprint = w.fingerprint();
-            snaps.push(s);
+            snaps.push((Box::new(*s.head()), s.edges_in_use().to_vec()));
         }
         Fixture {
             world: load_world(&args).expect("the fixture world loads"),
@@ -68,8 +69,8 @@ fn fixture() -> &'static Fixture {
     })
 }
 
-/// The message's bytes, writable.
-fn bytes_of<T: Message>(m: &mut T) -> &mut [u8] {
+/// The message's bytes, writable (`T` is a wire type: integers and floats).
+fn bytes_of<T: Copy>(m: &mut T) -> &mut [u8] {
     // SAFETY: message types are plain integers/floats with no padding
     // (checked by msg's layout test), so every byte is initialised and any
     // byte pattern written back is a valid value.
@@ -77,7 +78,7 @@ fn bytes_of<T: Message>(m: &mut T) -> &mut [u8] {
 }
 
 /// Flips bit `bit` of byte `at % used` of the message's first `used` bytes.
-fn flip<T: Message>(m: &mut T, flips: &[(usize, u8)], used: usize) {
+fn flip<T: Copy>(m: &mut T, flips: &[(usize, u8)], used: usize) {
     let b = bytes_of(m);
     let used = used.clamp(1, b.len());
     for &(at, bit) in flips {
@@ -85,18 +86,19 @@ fn flip<T: Message>(m: &mut T, flips: &[(usize, u8)], used: usize) {
     }
 }
 
-/// Bytes of a snapshot that carry data (header, scalars, n nodes, m edges),
-/// mapped to a flat index space so flips land where they matter.
-fn snapshot_offset(s: &WaypointSnapshot, at: usize) -> usize {
-    let nodes = core::mem::offset_of!(WaypointSnapshot, nodes);
-    let edges = core::mem::offset_of!(WaypointSnapshot, edges);
-    let n_bytes = s.node_count as usize * 32;
-    let m_bytes = s.edge_count as usize * 32;
-    let at = at % (nodes + n_bytes + m_bytes);
-    if at < nodes + n_bytes {
-        at
-    } else {
-        edges + (at - nodes - n_bytes)
+/// Flips bits of a snapshot's wire form where they carry data: the head's
+/// scalars and its n nodes, then the edges, as one flat index space.
+fn flip_snapshot(head: &mut SnapshotHead, edges: &mut [WireEdge], flips: &[(usize, u8)]) {
+    let in_head = core::mem::offset_of!(SnapshotHead, nodes) + head.node_count as usize * 32;
+    let used = in_head + edges.len() * 32;
+    for &(at, bit) in flips {
+        let at = at % used;
+        if at < in_head {
+            bytes_of(head)[at] ^= 1 << (bit % 8);
+        } else {
+            let (e, b) = ((at - in_head) / 32, (at - in_head) % 32);
+            bytes_of(&mut edges[e])[b] ^= 1 << (bit % 8);
+        }
     }
 }
 
@@ -126,10 +128,13 @@ proptest! {
         prio in proptest::collection::vec(prop_oneof![8 => -50.0f64..50.0, 1 => Just(f64::NAN)], MAX_NODES),
     ) {
         let f = fixture();
-        let mut s = f.snaps[which].clone();
+        let (mut head, mut edges) = f.snaps[which].clone();
+        let mut s = WaypointSnapshot::new();
+        s.receive(&head, &edges);
         prop_assert_eq!(s.validate().and_then(|()| f.rules.check_snapshot(&s)), Ok(()));
-        let offsets: Vec<(usize, u8)> = flips.iter().map(|&(at, bit)| (snapshot_offset(&s, at), bit)).collect();
-        flip(&mut *s, &offsets, usize::MAX);
+        flip_snapshot(&mut head, &mut edges, &flips);
+        // As a subscriber takes a sample in.
+        s.receive(&head, &edges);
         let verdict = s.validate().and_then(|()| f.rules.check_snapshot(&s));
         if verdict.is_err() {
             return Ok(());
@@ -137,7 +142,7 @@ proptest! {
         // Accepted: every documented invariant holds.
         let (n, m) = (s.node_count as usize, s.edge_count as usize);
         prop_assert_eq!(n, N);
-        prop_assert!(m <= MAX_EDGES);
+        prop_assert_eq!(m, edges.len());
         prop_assert!(s.speed_mps.is_finite() && s.speed_mps > 0.0);
         prop_assert!(s.time_available_s.is_finite() && s.time_available_s > 0.0);
         prop_assert!(ObjectiveCode::from_code(s.objective).is_some());
@@ -145,14 +150,14 @@ proptest! {
             prop_assert!(w.x.is_finite() && w.y.is_finite() && w.z.is_finite() && w.prize >= 0.0);
             prop_assert!(f.world.map().is_water(w.x, w.y));
         }
-        for e in &s.edges[..m] {
+        for e in s.edges_in_use() {
             prop_assert!((e.a as usize) < n && (e.b as usize) < n && e.a != e.b);
             prop_assert!(e.risk > 0.0 && e.priority >= 0.0 && e.task_time_s >= 0.0);
         }
         // Plannable: any priorities decode to a valid route on its edges.
-        let mut p = Problem::new();
+        let mut p: Problem = Problem::new();
         let start = s.start as usize;
-        if fill_problem(&s, &mut p, start, NodeSet::EMPTY, s.time_available_s, &[0.0; MAX_NODES]).is_ok() {
+        if fill_problem(&s, &mut p, start, NodeSet::EMPTY, s.time_available_s, &[]).is_ok() {
             let mut r = Route::new();
             let e = Decoder::new().decode(&p, &prio, &mut r);
             prop_assert_eq!(p.evaluate(&r), Some(e));
@@ -166,14 +171,33 @@ proptest! {
 
     /// Random bytes as a snapshot: validator and world rules never panic.
     #[test]
-    fn random_snapshots_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..2048), n in 0u32..200, m in 0u32..400) {
-        let mut s = boxed_zeroed::<WaypointSnapshot>();
-        let b = bytes_of(&mut *s);
+    fn random_snapshots_never_panic(
+        bytes in proptest::collection::vec(any::<u8>(), 0..2048),
+        n in 0u32..600,
+        m in 0u32..400,
+        slice in 0usize..400,
+    ) {
+        let mut head = boxed_zeroed::<SnapshotHead>();
+        let b = bytes_of(&mut *head);
         let k = bytes.len().min(b.len());
         b[..k].copy_from_slice(&bytes[..k]);
-        s.node_count = n;
-        s.edge_count = m;
+        head.node_count = n;
+        head.edge_count = m;
+        let edges: Vec<WireEdge> = (0..slice)
+            .map(|i| {
+                let mut e = WireEdge::default();
+                let eb = bytes_of(&mut e);
+                for (j, x) in eb.iter_mut().enumerate() {
+                    *x = bytes.get((i * 32 + j) % bytes.len().max(1)).copied().unwrap_or(0);
+                }
+                e
+            })
+            .collect();
+        let mut s = WaypointSnapshot::with_capacity(300);
+        s.receive(&head, &edges);
         if s.validate().is_ok() {
+            prop_assert_eq!(s.edge_count as usize, edges.len());
+            prop_assert!(m as usize == slice && slice <= 300 && n as usize <= MAX_WIRE_NODES);
             let _ = fixture().rules.check_snapshot(&s);
         }
     }
@@ -211,8 +235,8 @@ proptest! {
         prop_assert_eq!(p.validate(), Ok(()));
         flip(&mut p, &flips, usize::MAX);
         if p.validate().is_ok() {
-            prop_assert!((1..=MAX_NODES).contains(&(p.route_len as usize)));
-            prop_assert!(route_ids(&p.route, p.route_len).iter().all(|&id| (id as usize) < MAX_NODES));
+            prop_assert!((1..=MAX_WIRE_NODES).contains(&(p.route_len as usize)));
+            prop_assert!(route_ids(&p.route, p.route_len).iter().all(|&id| (id as usize) < MAX_WIRE_NODES));
             prop_assert!(TriggerKind::from_code(p.trigger).is_some());
             prop_assert!(p.feasible <= 1 && p.fallback <= 1 && p.deadline_cut <= 1);
             prop_assert!([p.time_s, p.weight, p.distance_m, p.budget_s].iter().all(|v| v.is_finite()));
@@ -310,5 +334,58 @@ proptest! {
         prop_assert_eq!(rejected.0.len(), REJECT_KINDS);
         let goods = msgs.iter().filter(|(g, _, _)| *g).count() as u64;
         prop_assert!(accepted >= goods, "a good message was refused");
+    }
+
+    /// Snapshots through a real (in-process) slice transport and the guard:
+    /// each sample carries exactly its edges, every snapshot sent is handed
+    /// on intact or counted rejected once (a head and slice that disagree
+    /// about the edge count among them).
+    #[test]
+    fn snapshots_through_the_slice_transport_arrive_intact_or_are_counted(
+        msgs in proptest::collection::vec((0usize..8, any::<bool>(), proptest::collection::vec((any::<usize>(), any::<u8>()), 1..4), 0u8..3), 1..12),
+    ) {
+        let f = fixture();
+        let fp = f.world.fingerprint();
+        let opts = IpcOptions::new(Some(&unique_prefix("p")), "prop", WaitMode::Spin).unwrap();
+        let ctx = IpcContext::<InProcess>::new(&opts, "prop").unwrap();
+        let mut out = ctx.snapshot_outbox(Stamp::new(fp), N).unwrap();
+        let rules = std::sync::Arc::new(f.rules.clone());
+        let mut inbox = Guarded::new(ctx.snapshot_inbox().unwrap(), fp, "prop").with_check(rules.snapshot_check());
+        let mut accepted = 0u64;
+        for (which, good, flips, fault) in &msgs {
+            let (head, edges) = &f.snaps[*which];
+            let mut fill = |m: &mut WaypointSnapshot| {
+                m.receive(head, edges);
+            };
+            let mut tamper = |m: &mut WaypointSnapshot| {
+                if !good {
+                    let (mut h, mut e) = (Box::new(*m.head()), m.edges_in_use().to_vec());
+                    // Payload only (the header stays in sequence).
+                    let payload: Vec<(usize, u8)> = flips.iter().map(|&(at, bit)| (core::mem::size_of::<Header>() + at, bit)).collect();
+                    flip_snapshot(&mut h, &mut e, &payload);
+                    h.header = m.header;
+                    m.receive(&h, &e);
+                    if *fault == 1 {
+                        // A head whose edge count no slice can match: the
+                        // sample carries the buffer's capacity of edges.
+                        m.edge_count = u32::MAX;
+                    }
+                }
+            };
+            out.publish_tampered(&mut fill, &mut tamper).unwrap();
+            inbox.drain(&mut |m: &WaypointSnapshot| {
+                assert!(m.validate().is_ok() && rules.check_snapshot(m).is_ok());
+                if *good {
+                    assert_eq!(m.edges_in_use(), &edges[..], "a good snapshot arrives with exactly its edges");
+                    assert_eq!(m.nodes[..N], head.nodes[..N]);
+                }
+                accepted += 1;
+            }).unwrap();
+        }
+        prop_assert_eq!(accepted + inbox.rejected().total(), msgs.len() as u64);
+        let goods = msgs.iter().filter(|m| m.1).count() as u64;
+        prop_assert!(accepted >= goods, "a good snapshot was refused");
+        // Publishing through the plain path needs no tamper.
+        out.publish(&mut |m: &mut WaypointSnapshot| m.receive(&f.snaps[0].0, &f.snaps[0].1)).unwrap();
     }
 }

@@ -23,7 +23,6 @@ use crate::scenario::{ChartSource, ConfigError, LoadError, RedrawReport, Scenari
 use auv_core::capacity::LARGEST_NODES;
 use auv_core::instance::Instance;
 use auv_core::problem::DEFAULT_RESERVE_S;
-use auv_core::problem::MAX_NODES;
 
 /// How a process picks its world (flags shared by all three binaries).
 #[derive(Clone, Debug, Default, PartialEq, clap::Args)]
@@ -115,7 +114,7 @@ impl ScenarioArgs {
             None => ScenarioConfig::default(),
         };
         if let Some(n) = self.nodes {
-            if !(2..=MAX_NODES).contains(&n) {
+            if !(2..=LARGEST_NODES).contains(&n) {
                 return Err(WorldError::BadNodeCount(n));
             }
             cfg.nodes = n;
@@ -125,9 +124,6 @@ impl ScenarioArgs {
             cfg.time_available_s = t;
         }
         cfg.validate()?;
-        if cfg.nodes > MAX_NODES {
-            return Err(WorldError::TooManyForService(cfg.nodes));
-        }
         Ok(cfg)
     }
 }
@@ -136,14 +132,8 @@ impl ScenarioArgs {
 #[derive(Debug, thiserror::Error)]
 pub enum WorldError {
     /// Bad node count.
-    #[error("--nodes {0}: must be between 2 and {MAX_NODES}")]
+    #[error("--nodes {0}: must be between 2 and {LARGEST_NODES}")]
     BadNodeCount(usize),
-    /// More waypoints than the real-time service's messages carry.
-    #[error(
-        "scenario field `nodes` = {0} exceeds the real-time service's capacity of {MAX_NODES} waypoints \
-         (`planner export` and the offline solvers take up to {LARGEST_NODES})"
-    )]
-    TooManyForService(usize),
     /// The scenario file or an override is invalid.
     #[error("scenario: {0}")]
     Config(#[from] ConfigError),
@@ -374,9 +364,9 @@ mod tests {
     }
 
     #[test]
-    fn a_scenario_beyond_the_service_class_is_a_clear_error_here() {
-        let path = std::env::temp_dir().join(format!("auv-load-n200-{}.json", std::process::id()));
-        std::fs::write(&path, r#"{"format": "auv-scenario/1", "nodes": 200}"#).unwrap();
+    fn a_scenario_beyond_the_largest_class_is_a_clear_error_and_one_within_it_loads() {
+        let path = std::env::temp_dir().join(format!("auv-load-n513-{}.json", std::process::id()));
+        std::fs::write(&path, r#"{"format": "auv-scenario/1", "nodes": 513}"#).unwrap();
         let e = load_world(&ScenarioArgs {
             scenario: Some(path.clone()),
             ..Default::default()
@@ -384,8 +374,21 @@ mod tests {
         .err()
         .unwrap();
         let _ = std::fs::remove_file(&path);
-        assert!(matches!(e, WorldError::TooManyForService(200)), "{e}");
-        assert!(e.to_string().contains("capacity of 128 waypoints"), "{e}");
+        assert!(e.to_string().contains("513"), "{e}");
+        assert!(!e.to_string().contains('\n'), "{e}");
+        let e = ScenarioArgs {
+            nodes: Some(513),
+            ..Default::default()
+        }
+        .config()
+        .unwrap_err();
+        assert!(matches!(e, WorldError::BadNodeCount(513)), "{e}");
+        let w = load_world(&ScenarioArgs {
+            nodes: Some(200),
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(w.world().n(), 200);
     }
 
     #[test]
@@ -406,7 +409,7 @@ mod tests {
         let back = <P as clap::Parser>::try_parse_from(argv).unwrap().s;
         assert_eq!(back, a);
         assert!(matches!(load_world(&args(1, 1)), Err(WorldError::BadNodeCount(1))));
-        assert!(matches!(load_world(&args(1, 129)), Err(WorldError::BadNodeCount(129))));
+        assert!(matches!(load_world(&args(1, 513)), Err(WorldError::BadNodeCount(513))));
         let mut neg = args(1, 10);
         neg.time_available_s = Some(-1.0);
         assert!(matches!(load_world(&neg), Err(WorldError::Config(_))));

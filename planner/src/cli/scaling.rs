@@ -27,13 +27,13 @@ use std::time::Duration;
 use auv_core::capacity::nodes_of;
 use auv_core::decode::{Decoder, PRIORITY_MAX, PRIORITY_MIN};
 use auv_core::instance::Instance;
-use auv_core::problem::{MAX_NODES, Problem};
+use auv_core::problem::Problem;
 use auv_core::rng::PlannerRng;
 use auv_core::route::RouteEval;
 use auv_core::solver::exact::{ExactSettings, solve_exact};
 use auv_core::solver::pso::{Pso, PsoSettings};
 use auv_core::solver::{Algorithm, Budget, Solver, run as run_solver};
-use auv_messages::msg::WaypointSnapshot;
+use auv_messages::msg::{MAX_WIRE_NODES, SnapshotHead, WireEdge};
 use auv_platform::clock::thread_cpu_time_s;
 use planner::plot::{XyPanel, XySeries, xy_figure};
 
@@ -90,7 +90,7 @@ struct Row {
     exact_s: f64,
     /// Certified gap of the best route known to the exact solver's bound, %.
     exact_gap: f64,
-    /// Bytes of the snapshot message, when the service's class holds the network.
+    /// Bytes of the snapshot message, when the messages carry the network.
     snapshot_bytes: Option<usize>,
 }
 
@@ -286,11 +286,13 @@ fn measure<const W: usize>(
         exact_proved,
         exact_s,
         exact_gap,
-        snapshot_bytes: (problem.n() <= MAX_NODES).then_some(core::mem::size_of::<WaypointSnapshot>()),
+        // The head (every waypoint slot) and one 32-byte record per edge.
+        snapshot_bytes: (problem.n() <= MAX_WIRE_NODES)
+            .then_some(core::mem::size_of::<SnapshotHead>() + edges * core::mem::size_of::<WireEdge>()),
     })
 }
 
-/// The snapshot column: bytes, or "not carried" above the service's class.
+/// The snapshot column: bytes, or "not carried" beyond the messages' capacity.
 fn snapshot_text(bytes: Option<usize>) -> String {
     bytes.map_or_else(|| "not carried".to_owned(), |b| b.to_string())
 }

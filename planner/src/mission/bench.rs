@@ -34,9 +34,7 @@ use hdrhistogram::Histogram;
 use serde_json::json;
 
 use crate::serve::{DEFAULT_RT_PRIORITY, ServeArgs, ServiceArgs, request_fifo};
-use auv_messages::msg::{
-    Outcome, Plan, PlannerStatus, RawPing, RawPong, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot,
-};
+use auv_messages::msg::{Outcome, Plan, PlannerStatus, RawPing, RawPong, VehicleEvent, VehicleMode, VehicleState};
 use auv_messages::network::write_snapshot;
 use auv_platform::clock::mono_now_ns;
 use auv_platform::host::{host_steal_ticks, ms_per_tick};
@@ -273,7 +271,7 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
     let planner = Reaper(Some(spawn(&args)?));
     let ctx = IpcContext::<Shm>::new(opts, "bench")?;
     let stamp = Stamp::new(fingerprint);
-    let mut snapshots = ctx.outbox::<WaypointSnapshot>(stamp)?;
+    let mut snapshots = ctx.snapshot_outbox(stamp, inst.nodes.len())?;
     let mut states = ctx.outbox::<VehicleState>(stamp)?;
     let mut plans = ctx.inbox::<Plan>()?;
     let mut status_in = ctx.inbox::<PlannerStatus>()?;
@@ -310,7 +308,7 @@ fn planner_run(opts: &IpcOptions, a: &BenchArgs) -> Result<PlannerRun, BenchErro
         status: None,
         planner_stderr: String::new(),
     };
-    let start = inst.start as u8;
+    let start = inst.start as u16;
     let pause = Duration::from_secs_f64(a.pause_ms / 1e3);
     for k in 0..a.warmup + a.triggers {
         let steal_before = host_steal_ticks();

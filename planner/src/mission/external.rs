@@ -59,7 +59,7 @@ pub fn announce(ext: ExternalArgs, prefix: &str, vehicle: &str, fingerprint: u64
     if ext.external_sensor {
         eprintln!(
             "planner: waiting for an outside sensor on --ipc-prefix {prefix} --vehicle {vehicle} \
-             (scenario fingerprint {fingerprint:016x}): it publishes auv.WaypointSnapshot.v1 (see docs/wire.md)"
+             (scenario fingerprint {fingerprint:016x}): it publishes auv.WaypointSnapshot.v2 behind a slice of auv.WireEdge.v1 (see docs/wire.md)"
         );
     }
 }

@@ -27,7 +27,7 @@ use auv_core::rng::PlannerRng;
 use auv_messages::msg::{
     AllocCounters, PlannerStatus, REJECT_KINDS, RejectCounters, Validate, VehicleState, WaypointSnapshot,
 };
-use auv_transport::ipc::{IpcContext, IpcInbox, Shm};
+use auv_transport::ipc::{IpcContext, IpcInbox, IpcSnapshotInbox, Shm};
 use auv_transport::{Inbox, IpcOptions, SetupError};
 
 /// A supervised process.
@@ -146,7 +146,7 @@ pub enum LivenessEvent {
 pub struct Monitor {
     _ctx: IpcContext<Shm>,
     states: IpcInbox<Shm, VehicleState>,
-    snapshots: IpcInbox<Shm, WaypointSnapshot>,
+    snapshots: IpcSnapshotInbox<Shm>,
     status: IpcInbox<Shm, PlannerStatus>,
     live: [Liveness; 3],
     timeouts: [Duration; 3],
@@ -169,7 +169,7 @@ impl Monitor {
         let ctx = IpcContext::<Shm>::new(opts, "supervisor")?;
         Ok(Self {
             states: ctx.inbox()?,
-            snapshots: ctx.inbox()?,
+            snapshots: ctx.snapshot_inbox()?,
             status: ctx.inbox()?,
             _ctx: ctx,
             live: [Liveness::default(); 3],

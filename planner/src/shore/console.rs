@@ -355,7 +355,7 @@ fn render(view: &View, link: &ShoreLink, a: &ShoreArgs) -> String {
         None => o += "  no vehicle state yet\n",
     }
     if let Some(p) = &view.plan {
-        let route: Vec<String> = p.route.iter().map(u8::to_string).collect();
+        let route: Vec<String> = p.route.iter().map(u16::to_string).collect();
         o += &format!(
             "  plan {} ({}): {} | {:.0} s of {:.0} s, weight {:.1}{}\n",
             p.replan,

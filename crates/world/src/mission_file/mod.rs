@@ -146,7 +146,7 @@ pub enum Problem {
         explicit: usize,
         /// Drawn.
         generated: usize,
-        /// [`auv_core::problem::MAX_NODES`].
+        /// [`auv_core::capacity::LARGEST_NODES`].
         max: usize,
     },
     /// The chart cannot be used.

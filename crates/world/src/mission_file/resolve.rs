@@ -15,8 +15,9 @@ use crate::scenario::{
     ChartSource, GeneratedNodes, Layout, LayoutNode, STREAM_CHART, ScenarioConfig, Task, TaskRule, UniformRange, Vec3,
     World,
 };
+use auv_core::capacity::LARGEST_NODES;
 use auv_core::instance::Objective;
-use auv_core::problem::{MAX_NODES, NodeSet, ProblemError};
+use auv_core::problem::{NodeSet, ProblemError};
 use auv_core::rng::derive_seed;
 
 /// Least water share of a dynamic waypoint's bound box (our choice: below
@@ -406,8 +407,8 @@ pub(super) fn resolve(text: &str, dir: &Path, overrides: Overrides) -> Result<Mi
     });
     let count = |field: &str, v: Option<i64>| -> Result<usize, Problem> {
         match v.unwrap_or(0) {
-            c if (0..=MAX_NODES as i64).contains(&c) => Ok(c as usize),
-            c => Err(bad(field, c as f64, "an integer in 0..=128")),
+            c if (0..=LARGEST_NODES as i64).contains(&c) => Ok(c as usize),
+            c => Err(bad(field, c as f64, "an integer in 0..=512")),
         }
     };
     let gen_static = count("generate.static", generate.fixed)?;
@@ -506,12 +507,12 @@ pub(super) fn resolve(text: &str, dir: &Path, overrides: Overrides) -> Result<Mi
     }
     let (start_i, goal_i) = (starts[0], goals[0]);
     let count = doc.waypoint.len() + gen_static + gen_dynamic;
-    if count > MAX_NODES {
+    if count > LARGEST_NODES {
         return Err(Problem::Capacity {
             count,
             explicit: doc.waypoint.len(),
             generated: gen_static + gen_dynamic,
-            max: MAX_NODES,
+            max: LARGEST_NODES,
         });
     }
 
@@ -753,10 +754,18 @@ pub(super) fn resolve(text: &str, dir: &Path, overrides: Overrides) -> Result<Mi
             "vehicle.reserve_s = {reserve_s} leaves nothing of time_available_s = {time_available_s}"
         )));
     }
-    let mut problem: auv_core::problem::Problem = auv_core::problem::Problem::new();
-    match world.fill_problem(&mut problem, world.start(), NodeSet::EMPTY, plan_budget) {
-        Ok(()) => {
-            let shortest = problem.to_goal_s(world.start());
+    // The quickest time to the goal, on a problem of the smallest class that holds the network.
+    let quickest = match auv_core::capacity::Class::for_nodes(world.n()) {
+        Ok(class) => auv_core::with_class!(class, W => {
+            let mut problem = auv_core::problem::Problem::<W>::new();
+            world
+                .fill_problem(&mut problem, world.start(), NodeSet::EMPTY, plan_budget)
+                .map(|()| problem.to_goal_s(world.start()))
+        }),
+        Err(e) => return Err(Problem::World(e.to_string())),
+    };
+    match quickest {
+        Ok(shortest) => {
             if shortest > plan_budget {
                 return Err(no_route(format!(
                     "the quickest takes {shortest:.0} s, the budget less the reserve is {plan_budget:.0} s"

@@ -450,14 +450,14 @@ fn error_unknown_waypoint_name_in_a_task() {
 
 #[test]
 fn error_more_waypoints_than_the_planners_capacity() {
-    let text = format!("{BASE}\n[generate]\nstatic = 100\ndynamic = 30\n");
+    let text = format!("{BASE}\n[generate]\nstatic = 500\ndynamic = 30\n");
     refused(
         &text,
-        &["135 waypoints (5 explicit + 130 generated) exceed the real-time planner's capacity of 128"],
+        &["535 waypoints (5 explicit + 530 generated) exceed the real-time planner's capacity of 512"],
     );
     refused(
         &format!("{BASE}\n[generate]\nstatic = -1\n"),
-        &["generate.static = -1: must be an integer in 0..=128"],
+        &["generate.static = -1: must be an integer in 0..=512"],
     );
 }
 

@@ -81,8 +81,7 @@ impl UniformRange {
 /// the [module table](super).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScenarioConfig {
-    /// Waypoint count n (node 0 the start, node n−1 the goal); 2..=[`LARGEST_NODES`]
-    /// (the real-time service takes up to [`auv_core::problem::MAX_NODES`]).
+    /// Waypoint count n (node 0 the start, node n−1 the goal); 2..=[`LARGEST_NODES`].
     pub nodes: usize,
     /// Dynamic waypoint count d ≤ n − 2; they are ids 1..=d.
     pub dynamic: usize,
