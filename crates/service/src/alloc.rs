@@ -321,12 +321,35 @@ impl PoolState {
     /// # Safety
     /// As `GlobalAlloc::alloc`.
     pub unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: forwarded contract.
+        unsafe { self.alloc_maybe_zeroed(layout, false) }
+    }
+
+    /// `GlobalAlloc::alloc_zeroed` on this state: System's own zeroed
+    /// allocation outside the pool, so a large zeroed buffer (a snapshot's
+    /// edge buffer) stays untouched pages until it is written, instead of
+    /// being zeroed byte by byte.
+    ///
+    /// # Safety
+    /// As `GlobalAlloc::alloc_zeroed`.
+    pub unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: forwarded contract.
+        unsafe { self.alloc_maybe_zeroed(layout, true) }
+    }
+
+    /// # Safety
+    /// As `GlobalAlloc::alloc`.
+    unsafe fn alloc_maybe_zeroed(&self, layout: Layout, zeroed: bool) -> *mut u8 {
         if self.is_watched() {
             if layout.align() <= BLOCK_ALIGN && !self.base.load(Ordering::Relaxed).is_null() {
                 let b = self.pool_take(layout.size());
                 if !b.is_null() {
                     if self.steady.load(Ordering::Relaxed) {
                         self.pool_allocs_steady.fetch_add(1, Ordering::Relaxed);
+                    }
+                    if zeroed {
+                        // SAFETY: the block holds at least `layout.size()` bytes.
+                        unsafe { core::ptr::write_bytes(b, 0, layout.size()) };
                     }
                     return b;
                 }
@@ -337,7 +360,13 @@ impl PoolState {
             self.count_sys_alloc();
         }
         // SAFETY: forwarded contract.
-        unsafe { System.alloc(layout) }
+        unsafe {
+            if zeroed {
+                System.alloc_zeroed(layout)
+            } else {
+                System.alloc(layout)
+            }
+        }
     }
 
     /// `GlobalAlloc::dealloc` on this state.
@@ -415,6 +444,11 @@ unsafe impl GlobalAlloc for PoolAlloc {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         // SAFETY: forwarded.
         unsafe { STATE.alloc(layout) }
+    }
+    #[inline]
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: forwarded.
+        unsafe { STATE.alloc_zeroed(layout) }
     }
     #[inline]
     unsafe fn dealloc(&self, p: *mut u8, layout: Layout) {
@@ -504,6 +538,28 @@ mod tests {
         assert_eq!(c.sys_frees_steady, 1);
         assert_eq!(c.pool_misses, 1, "misses count in steady state only");
         assert_eq!(c.pool_capacity, 4);
+    }
+
+    #[test]
+    fn zeroed_blocks_are_zero_from_the_pool_and_from_the_system() {
+        let s = PoolState::new();
+        s.watch_this_thread();
+        assert!(s.reserve(&[(64, 1)]));
+        unsafe {
+            // A used pool block, written to, comes back zeroed.
+            let a = s.alloc(l(64));
+            core::ptr::write_bytes(a, 0xAB, 64);
+            s.dealloc(a, l(64));
+            let z = s.alloc_zeroed(l(64));
+            assert!(s.in_pool(z));
+            assert!(core::slice::from_raw_parts(z, 64).iter().all(|&b| b == 0));
+            // Beyond the pool: System's zeroed memory.
+            let big = s.alloc_zeroed(l(1 << 20));
+            assert!(!s.in_pool(big));
+            assert!(core::slice::from_raw_parts(big, 1 << 20).iter().all(|&b| b == 0));
+            s.dealloc(big, l(1 << 20));
+            s.dealloc(z, l(64));
+        }
     }
 
     #[test]
