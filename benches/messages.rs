@@ -10,7 +10,7 @@
 //! Run: `cargo bench --bench messages -- --warm-up-time 1 --measurement-time 3`
 use std::hint::black_box;
 
-use auv_messages::msg::{SnapshotHead, WaypointSnapshot, WireEdge};
+use auv_messages::msg::{SnapshotHead, WaypointSnapshot};
 use auv_messages::network::write_snapshot;
 use auv_world::scenario::{ScenarioConfig, World, load_map};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -34,7 +34,7 @@ fn receive(c: &mut Criterion) {
     for n in SIZES {
         let src = snapshot(n);
         let (head, edges) = (*src.head(), src.edges_in_use().to_vec());
-        let bytes = core::mem::size_of::<SnapshotHead>() + edges.len() * core::mem::size_of::<WireEdge>();
+        let bytes = core::mem::size_of::<SnapshotHead>() + core::mem::size_of_val(edges.as_slice());
         g.throughput(Throughput::Bytes(bytes as u64));
         let mut dst = WaypointSnapshot::new();
         g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
@@ -51,7 +51,7 @@ fn copy(c: &mut Criterion) {
     let mut g = c.benchmark_group("snapshot_copy");
     for n in SIZES {
         let src = snapshot(n);
-        let bytes = core::mem::size_of::<SnapshotHead>() + src.edges_in_use().len() * core::mem::size_of::<WireEdge>();
+        let bytes = core::mem::size_of::<SnapshotHead>() + core::mem::size_of_val(src.edges_in_use());
         g.throughput(Throughput::Bytes(bytes as u64));
         let mut dst = WaypointSnapshot::new();
         g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
