@@ -111,10 +111,11 @@ class Outbox:
     def __init__(self, client, topic, max_nodes=128):
         self.topic = topic
         self._service = client._pubsub(topic)
+        self._max_edges = max(1, max_nodes * (max_nodes - 1) // 2)
         try:
             builder = self._service.publisher_builder().max_loaned_samples(1)
             if topic.user_header is not None:
-                builder = builder.initial_max_slice_len(max(1, max_nodes * (max_nodes - 1) // 2))
+                builder = builder.initial_max_slice_len(self._max_edges)
             self._publisher = builder.create()
         except Exception as e:  # iceoryx2 raises its own exception classes
             raise ClientError("create publisher on %s: %r" % (topic.leaf, e)) from e
@@ -127,6 +128,11 @@ class Outbox:
         (its head, and its first ``edge_count`` edges as the slice)."""
         if self.topic.user_header is not None:
             edges = msg.edges_in_use()
+            if len(edges) > self._max_edges:
+                raise ClientError(
+                    "%s: %d edges exceed the %d a sample of this outbox holds (open it with a larger max_nodes)"
+                    % (self.topic.leaf, len(edges), self._max_edges)
+                )
             sample = self._publisher.loan_slice_uninit(len(edges))
             ctypes.memmove(sample.user_header_ptr, ctypes.byref(msg.head), ctypes.sizeof(msg.head))
             if edges:

@@ -468,6 +468,13 @@ impl<S: Service> IpcSnapshotOutbox<S> {
             t(&mut self.staging);
         }
         let edges = self.staging.edges_in_use();
+        if edges.len() > self.staging.capacity() || self.staging.edge_count as usize > self.staging.capacity() {
+            return Err(TransportError::Oversized {
+                topic,
+                len: self.staging.edge_count as usize,
+                max: self.staging.capacity(),
+            });
+        }
         let mut sample = self
             .publisher
             .loan_slice_uninit(edges.len())

@@ -229,6 +229,17 @@ pub enum TransportError {
         /// Service leaf of the topic.
         topic: &'static str,
     },
+    /// A snapshot with more edges than its publisher's samples hold (they
+    /// are sized for every pair of the mission's waypoints).
+    #[error("{topic}: {len} edges exceed the {max} a sample of this publisher holds")]
+    Oversized {
+        /// Service leaf of the topic.
+        topic: &'static str,
+        /// Edges asked for.
+        len: usize,
+        /// Edges a sample holds.
+        max: usize,
+    },
     /// The sample could not be delivered.
     #[error("{topic}: send failed")]
     Send {

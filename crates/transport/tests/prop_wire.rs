@@ -18,11 +18,11 @@ use auv_messages::msg::{
 };
 use auv_messages::network::{fill_problem, find_edge, write_snapshot};
 use auv_messages::wire::WireRules;
-use auv_transport::Outbox;
 use auv_transport::faulty::TamperOutbox;
 use auv_transport::guard::Guarded;
 use auv_transport::ipc::{InProcess, IpcContext, Stamp};
 use auv_transport::{IpcOptions, WaitMode, unique_prefix};
+use auv_transport::{Outbox, TransportError};
 use auv_world::chart::WaterMap;
 use auv_world::load::{MissionWorld, ScenarioArgs, load_world};
 use proptest::prelude::*;
@@ -338,8 +338,8 @@ proptest! {
 
     /// Snapshots through a real (in-process) slice transport and the guard:
     /// each sample carries exactly its edges, every snapshot sent is handed
-    /// on intact or counted rejected once (a head and slice that disagree
-    /// about the edge count among them).
+    /// on intact or counted rejected once, and one whose head claims more
+    /// edges than a sample holds is refused by the sender, never sent.
     #[test]
     fn snapshots_through_the_slice_transport_arrive_intact_or_are_counted(
         msgs in proptest::collection::vec((0usize..8, any::<bool>(), proptest::collection::vec((any::<usize>(), any::<u8>()), 1..4), 0u8..3), 1..12),
@@ -351,7 +351,7 @@ proptest! {
         let mut out = ctx.snapshot_outbox(Stamp::new(fp), N).unwrap();
         let rules = std::sync::Arc::new(f.rules.clone());
         let mut inbox = Guarded::new(ctx.snapshot_inbox().unwrap(), fp, "prop").with_check(rules.snapshot_check());
-        let mut accepted = 0u64;
+        let (mut accepted, mut sent) = (0u64, 0u64);
         for (which, good, flips, fault) in &msgs {
             let (head, edges) = &f.snaps[*which];
             let mut fill = |m: &mut WaypointSnapshot| {
@@ -366,13 +366,19 @@ proptest! {
                     h.header = m.header;
                     m.receive(&h, &e);
                     if *fault == 1 {
-                        // A head whose edge count no slice can match: the
-                        // sample carries the buffer's capacity of edges.
+                        // More edges than any sample of this publisher holds.
                         m.edge_count = u32::MAX;
                     }
                 }
             };
-            out.publish_tampered(&mut fill, &mut tamper).unwrap();
+            match out.publish_tampered(&mut fill, &mut tamper) {
+                Ok(_) => sent += 1,
+                Err(TransportError::Oversized { len, max, .. }) => {
+                    prop_assert!(!good, "a good snapshot was refused by its sender");
+                    prop_assert!(len > max);
+                }
+                Err(e) => panic!("{e}"),
+            }
             inbox.drain(&mut |m: &WaypointSnapshot| {
                 assert!(m.validate().is_ok() && rules.check_snapshot(m).is_ok());
                 if *good {
@@ -382,7 +388,7 @@ proptest! {
                 accepted += 1;
             }).unwrap();
         }
-        prop_assert_eq!(accepted + inbox.rejected().total(), msgs.len() as u64);
+        prop_assert_eq!(accepted + inbox.rejected().total(), sent);
         let goods = msgs.iter().filter(|m| m.1).count() as u64;
         prop_assert!(accepted >= goods, "a good snapshot was refused");
         // Publishing through the plain path needs no tamper.
