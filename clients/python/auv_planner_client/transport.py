@@ -178,10 +178,12 @@ class Inbox:
                 return out
             if self.topic.user_header is not None:
                 head = m.copy_of(self.topic.user_header, sample.user_header_ptr)
-                edges = sample.payload()
-                n = edges.len()
-                array = (m.WireEdge * n).from_buffer_copy(ctypes.string_at(edges.as_ptr(), n * ctypes.sizeof(m.WireEdge)))
-                out.append(m.WaypointSnapshot(head, array))
+                # The sample header's element count: iceoryx2 0.10's Python
+                # `payload()` Slice of a sample from a Rust publisher has its
+                # length in bytes, which would read far past the sample.
+                n = sample.header.number_of_elements
+                data = ctypes.string_at(sample.payload_ptr, n * ctypes.sizeof(m.WireEdge))
+                out.append(m.WaypointSnapshot(head, (m.WireEdge * n).from_buffer_copy(data)))
             else:
                 out.append(m.copy_of(self.topic.cls, sample.payload_ptr))
             sample.delete()

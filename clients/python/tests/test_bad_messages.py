@@ -5,7 +5,10 @@ counted under their kind, as the Rust injectors' are (tests/wire.rs):
   out-of-order sequence number, sent by the Python vehicle next to its good
   ones (``--inject``), refused by the planner;
 - plans through a pair of waypoints that is no edge, sent by this test as a
-  second publisher on the plan topic, refused by vehicle-sim.
+  second publisher on the plan topic, refused by vehicle-sim;
+- snapshots whose head claims one edge more than their slice carries, sent
+  as a second publisher on the waypoints topic, refused by the planner and
+  vehicle-sim.
 
 Either way the mission runs exactly as without them."""
 
@@ -123,4 +126,50 @@ def test_non_edge_plans_from_python_are_refused_by_vehicle_sim(tmp_path):
     others = {k: n for k, n in r["rejected_by_receiver"]["vehicle"].items() if k != "non_edge"}
     assert not any(others.values()), others
     assert not any(r["rejected_by_receiver"]["planner"].values()), r["rejected_by_receiver"]
+    same_mission(r, clean)
+
+
+def test_snapshots_whose_head_and_slice_disagree_are_refused_by_both_receivers(tmp_path):
+    # A second publisher on the waypoints topic sends, after each good
+    # snapshot, its twin whose head claims one edge more than its slice
+    # carries: the planner and vehicle-sim each refuse it as malformed, and
+    # the mission runs as without it.
+    clean = read_json(os.path.join(rust_mission(tmp_path, 7, "clean", nodes=None), "report.json"))
+    pfx = prefix("s")
+    out = str(tmp_path / "bad")
+    c = t.Client(pfx, "auv1", "py-injector")
+    snapshots = c.inbox(t.WAYPOINTS)
+    forged = c.outbox(t.WAYPOINTS, max_nodes=40)
+    waker = c.waker("vehicle")  # every snapshot wakes the vehicle's role
+    mission = start_planner(
+        "mission", "--quiet", "--lockstep", "--seed", "7", "--ipc-prefix", pfx, "--out", out,
+    )
+    stamp, sent = None, 0
+    while mission.poll() is None:
+        waker.wait(0.05)
+        for s in snapshots.drain():
+            if stamp is None:
+                stamp = t.Stamp(s.header.fingerprint)
+            elif s.header.session == stamp.session:
+                continue  # our own
+            # A good snapshot arrives with exactly its edges.
+            assert len(s.edges) == s.edge_count, (len(s.edges), s.edge_count)
+            if sent >= 5:
+                continue
+            twin = m.WaypointSnapshot(s.head, s.edges)
+            twin.edge_count = len(s.edges) + 1
+            forged.publish(twin, stamp)
+            sent += 1
+    code, _, err = finish(mission, "planner mission")
+    del forged, snapshots, waker, c
+    sweep(pfx)
+    assert code == 0, err
+    r = read_json(os.path.join(out, "report.json"))
+    refused = {who: by_receiver(r, who, "malformed") for who in ("planner", "vehicle")}
+    print("python snapshots: %d sent, refused as malformed %s" % (sent, refused))
+    assert sent > 0
+    for who, n in refused.items():
+        assert 1 <= n <= sent, (who, n, sent)
+        others = {k: v for k, v in r["rejected_by_receiver"][who].items() if k != "malformed"}
+        assert not any(others.values()), (who, others)
     same_mission(r, clean)
