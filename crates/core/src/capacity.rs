@@ -5,7 +5,7 @@
 //! that holds per-node state ([`NodeSet`], [`PerNode`],
 //! [`crate::problem::Problem`], [`crate::route::Route`], the decoder and the
 //! solvers) takes the class as a `const W: usize` parameter, defaulting to
-//! [`DEFAULT_WORDS`] (128 nodes, the real-time service's class). Code for
+//! [`DEFAULT_WORDS`] (128 nodes, the paper's study and most tests). Code for
 //! each class is compiled separately, so a 40-node problem runs on buffers
 //! and loops sized for 64 or 128 nodes, never for 512.
 //!
@@ -15,8 +15,9 @@
 
 use core::ops::{BitAnd, BitAndAssign, BitOr, BitOrAssign, Deref, DerefMut, Not, Sub};
 
-/// Words of the default class (128 nodes): the service, the messages and the
-/// world generator use it.
+/// Words of the default class (128 nodes): the default of every generic type
+/// (the Monte Carlo study and most tests run it; the service and the solve
+/// commands pick a class by the network's size).
 pub const DEFAULT_WORDS: usize = 2;
 
 /// Words of the largest class this build supports.

@@ -24,11 +24,11 @@ use crate::route::RouteEval;
 /// against 23 with none, at about the same weight; 900 s was no safer).
 pub const DEFAULT_RESERVE_S: f64 = 300.0;
 
-/// Nodes of the default capacity class, the one the real-time service, its
-/// messages and the world generator use. 128 covers the paper's 40-node
+/// Nodes of the default capacity class (the default of every generic type,
+/// and the Monte Carlo study's limit). 128 covers the paper's 40-node
 /// networks, the largest classic orienteering set (66 nodes) and the
-/// design's "at least 128" requirement. Offline commands pick a class per
-/// instance ([`crate::capacity::Class`]), up to
+/// design's "at least 128" requirement. The service and the offline
+/// commands pick a class per network ([`crate::capacity::Class`]), up to
 /// [`crate::capacity::LARGEST_NODES`].
 pub const MAX_NODES: usize = nodes_of(DEFAULT_WORDS);
 

@@ -32,7 +32,7 @@
 //!
 //! | field | default | meaning | source |
 //! | --- | --- | --- | --- |
-//! | `nodes` | 40 | waypoints n; node 0 the start, node n−1 the goal; 2..=512 ([`auv_core::capacity::LARGEST_NODES`]; the real-time service takes up to 128) | the paper's model (network size) |
+//! | `nodes` | 40 | waypoints n; node 0 the start, node n−1 the goal; 2..=512 ([`auv_core::capacity::LARGEST_NODES`]; the Monte Carlo study takes up to 128) | the paper's model (network size) |
 //! | `dynamic` | 10 | dynamic waypoints d ≤ n−2 | the paper's model |
 //! | which nodes are dynamic | ids 1..=d | start and goal stay static; lowest ids so that changing n keeps them | our choice: the paper is silent |
 //! | static position | x ~ U(0, width), y ~ U(0, height), resampled until over water; z ~ U(0, `depth_max_m`) | also a dynamic waypoint's nominal position | the paper's model |
