@@ -20,7 +20,8 @@ use auv_core::instance::distance_3d_m as dist;
 use auv_core::route::Route as ClassRoute;
 use auv_messages::journal::Resume;
 use auv_messages::msg::{
-    MAX_WIRE_NODES, Outcome, Plan, RejectKind, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, route_ids,
+    MAX_WIRE_NODES, Outcome, Plan, RejectKind, VehicleEvent, VehicleMode, VehicleState, WaypointSnapshot, WireId,
+    route_ids,
 };
 use auv_messages::network::find_edge;
 
@@ -221,7 +222,7 @@ impl VehicleSim {
         verdict
     }
 
-    fn check_plan(&self, ids: &[u16]) -> Result<PlanOffer, RejectKind> {
+    fn check_plan(&self, ids: &[WireId]) -> Result<PlanOffer, RejectKind> {
         if !self.have_net {
             return Err(RejectKind::BadPlan);
         }

@@ -915,12 +915,6 @@ impl Message for WaypointSnapshot {
         &mut self.head.header
     }
 }
-
-/// The edge slice's element type name (`auv.WireEdge.v1`).
-pub fn edge_type_name() -> &'static str {
-    // SAFETY: `type_name` only returns the static string the derive set.
-    unsafe { <WireEdge as ZeroCopySend>::type_name() }
-}
 impl_message!(VehicleState, "vehicle state");
 impl_message!(Plan, "plan");
 impl_message!(PlannerStatus, "planner status");
@@ -1022,46 +1016,40 @@ impl Validate for WaypointSnapshot {
 /// Checks a snapshot's head and its `edges` (a received sample's slice, or
 /// the used part of a held buffer of `capacity` edges).
 pub fn validate_snapshot(head: &SnapshotHead, edges: &[WireEdge], capacity: usize) -> Result<(), RejectKind> {
-    head.validate_with(edges, capacity)
-}
-
-impl SnapshotHead {
-    fn validate_with(&self, edges: &[WireEdge], capacity: usize) -> Result<(), RejectKind> {
-        header_ok(&self.header)?;
-        positive(self.speed_mps)?;
-        positive(self.time_available_s)?;
-        at_least(self.next_update_s, self.header.mission_time_s)?;
-        let objective = code::<ObjectiveCode>(self.objective)?;
-        if objective == ObjectiveCode::PaperCost {
-            at_least(self.phi1, 0.0)?;
-            at_least(self.phi2, 0.0)?;
-        }
-        let n = count(self.node_count, MAX_WIRE_NODES)?;
-        let m = count(self.edge_count, MAX_WIRE_EDGES.min(capacity))?;
-        if m != edges.len() || n < 2 {
-            return Err(RejectKind::Malformed);
-        }
-        let (s, g) = (node(self.start, n)?, node(self.goal, n)?);
-        if s == g {
-            return Err(RejectKind::Malformed);
-        }
-        for p in &self.nodes[..n] {
-            finite(p.x)?;
-            finite(p.y)?;
-            finite(p.z)?;
-            at_least(p.prize, 0.0)?;
-        }
-        for e in edges {
-            let (a, b) = (node(e.a, n)?, node(e.b, n)?);
-            if a == b {
-                return Err(RejectKind::Malformed);
-            }
-            at_least(e.priority, 0.0)?;
-            positive(e.risk)?;
-            at_least(e.task_time_s, 0.0)?;
-        }
-        Ok(())
+    header_ok(&head.header)?;
+    positive(head.speed_mps)?;
+    positive(head.time_available_s)?;
+    at_least(head.next_update_s, head.header.mission_time_s)?;
+    let objective = code::<ObjectiveCode>(head.objective)?;
+    if objective == ObjectiveCode::PaperCost {
+        at_least(head.phi1, 0.0)?;
+        at_least(head.phi2, 0.0)?;
     }
+    let n = count(head.node_count, MAX_WIRE_NODES)?;
+    let m = count(head.edge_count, MAX_WIRE_EDGES.min(capacity))?;
+    if m != edges.len() || n < 2 {
+        return Err(RejectKind::Malformed);
+    }
+    let (s, g) = (node(head.start, n)?, node(head.goal, n)?);
+    if s == g {
+        return Err(RejectKind::Malformed);
+    }
+    for p in &head.nodes[..n] {
+        finite(p.x)?;
+        finite(p.y)?;
+        finite(p.z)?;
+        at_least(p.prize, 0.0)?;
+    }
+    for e in edges {
+        let (a, b) = (node(e.a, n)?, node(e.b, n)?);
+        if a == b {
+            return Err(RejectKind::Malformed);
+        }
+        at_least(e.priority, 0.0)?;
+        positive(e.risk)?;
+        at_least(e.task_time_s, 0.0)?;
+    }
+    Ok(())
 }
 
 impl Validate for VehicleState {

@@ -467,14 +467,11 @@ impl<S: Service> IpcSnapshotOutbox<S> {
         if let Some(t) = tamper {
             t(&mut self.staging);
         }
-        let edges = self.staging.edges_in_use();
-        if edges.len() > self.staging.capacity() || self.staging.edge_count as usize > self.staging.capacity() {
-            return Err(TransportError::Oversized {
-                topic,
-                len: self.staging.edge_count as usize,
-                max: self.staging.capacity(),
-            });
+        let (len, max) = (self.staging.edge_count as usize, self.staging.capacity());
+        if len > max {
+            return Err(TransportError::Oversized { topic, len, max });
         }
+        let edges = self.staging.edges_in_use();
         let mut sample = self
             .publisher
             .loan_slice_uninit(edges.len())
