@@ -18,6 +18,10 @@
 //! `crates/core/tests/data/oplib/`: the stream decode per vector and the
 //! paper's PSO budget.
 //!
+//! `cpu_risk_search/{40,64}` times 100 000 expansions of `auto`'s
+//! depth-first search over the low-risk edges (`paper_cost`) from the root,
+//! on the dense training networks of that objective.
+//!
 //! Run: `cargo bench --bench solvers -- --warm-up-time 1 --measurement-time 3`
 //! (single-threaded; the medians are what the targets refer to).
 //!
@@ -308,8 +312,45 @@ fn classes<M: Measurement>(c: &mut Criterion<M>, prefix: &str) {
     class_benches(c, prefix, "c512-n401", vec![oplib_problem::<8>("rd400-gen2-50")]);
 }
 
+/// `auto`'s depth-first search over the low-risk edges (`paper_cost`):
+/// 100 000 expansions from the root, per network in turn, on the training
+/// family's dense networks (Benoit's Cove, φ1 = 0.01, φ2 = 1) of 40 and 64
+/// nodes, without an incumbent (the search prunes against its own best).
+fn risk_search<M: Measurement>(c: &mut Criterion<M>, name: &str) {
+    use auv_core::instance::Objective;
+    use auv_core::solver::risk_search::{CANDIDATES, RiskSearch};
+    let mut g = c.benchmark_group(name);
+    g.sample_size(20);
+    for n in [40, 64] {
+        let config = ScenarioConfig {
+            nodes: n,
+            objective: Objective::PaperCost { phi1: 0.01, phi2: 1.0 },
+            ..ScenarioConfig::default()
+        };
+        let map = load_map(&config, 1000).expect("the embedded chart loads");
+        let ps: Vec<Problem<1>> = (0..NETWORKS)
+            .map(|k| {
+                let world = World::generate(&config, 1000 + k as u64, &map).expect("the scenario generates");
+                Problem::from_instance(&world.snapshot("bench")).expect("scenario networks join start and goal")
+            })
+            .collect();
+        let mut search = RiskSearch::<1>::new();
+        let mut k = 0usize;
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                k = k.wrapping_add(1);
+                let p = &ps[k % NETWORKS];
+                search.start(p, CANDIDATES);
+                black_box(search.run(p, f64::INFINITY, 100_000).is_some())
+            })
+        });
+    }
+    g.finish();
+}
+
 #[cfg(target_os = "linux")]
 fn cpu(c: &mut Criterion<ThreadCpuTime>) {
+    risk_search(c, "cpu_risk_search");
     decode(c, "cpu_decode");
     decode_stream(c, "cpu_decode_stream");
     pso(c, "cpu_pso_full_budget");

@@ -45,6 +45,27 @@
 //! order of the same nodes dominates, cut almost none.) Partial paths that
 //! cannot reach the goal within the budget (shortest time over the whole
 //! network) are cut as well.
+//!
+//! Aspiration (iterative deepening on the cost): the root's bound is often
+//! half the best cost or less, and a search that prunes against a weak
+//! incumbent (at first the kicks' routes, 10–50 % above the optimum on the
+//! dense training networks at a few milliseconds) expands far more partial
+//! paths than one that knows a cost near the optimum (told a cost within
+//! 5–10 % of it, the search reached the optimum of the untuned 50- and
+//! 64-node dense networks that took it 25–50 ms in under 10–20 ms). So the
+//! search first runs passes that prune at an aspiration, a cost it has no
+//! route for yet: 1/16 above the root's bound, each pass that finds no
+//! route below it aspiring 1.5 times as far above the bound, until a pass
+//! finds one (it then prunes at that route, so the pass is complete: no
+//! route better than its best is left unexplored) or the aspiration passes
+//! twice the bound, after which it runs without one. A failed pass costs
+//! little next to the first pass that succeeds, which prunes at a cost
+//! close to the optimum instead of at the incumbent. A route a pass
+//! reaches above its aspiration but below the best cost is still taken
+//! and reported: without that, the passes held back the mediocre routes a
+//! search without aspirations reports within a millisecond, which the
+//! kicks improve on (5 ms mean gaps of 20–40 % on the untuned dense
+//! families, against 2–7 % with it).
 
 use crate::capacity::nodes_of;
 use crate::instance::Objective;
@@ -53,6 +74,17 @@ use crate::route::{Route, RouteEval};
 
 /// Most lowest-risk edges a node contributes to the candidate graph.
 pub const CANDIDATES: usize = 16;
+
+/// The first aspiration, as a fraction above the root's bound (see
+/// [`RiskSearch::run`]).
+const FIRST_ASPIRATION: f64 = 1.0 / 16.0;
+
+/// Each pass that finds no route below its aspiration multiplies the
+/// fraction by this.
+const ASPIRATION_GROWTH: f64 = 1.5;
+
+/// Past this fraction the search runs without an aspiration.
+const LAST_ASPIRATION: f64 = 2.0;
 
 /// Most candidate neighbours a node keeps.
 pub const DEGREE: usize = 2 * CANDIDATES;
@@ -103,6 +135,11 @@ pub struct RiskSearch<const W: usize> {
     budget_s: f64,
     /// Cost of the best route the search found or was told of.
     best_cost: f64,
+    /// The aspiration: a cost the search prunes at as if a route of that
+    /// cost were known (∞: none). See [`RiskSearch::run`].
+    cap: f64,
+    /// The root's lower bound on the cost of any candidate route.
+    root_bound: f64,
     found: Route<W>,
 }
 
@@ -132,6 +169,8 @@ impl<const W: usize> RiskSearch<W> {
             idle_price: 0.0,
             budget_s: 0.0,
             best_cost: f64::INFINITY,
+            cap: f64::INFINITY,
+            root_bound: 0.0,
             found: Route::new(),
         }
     }
@@ -216,6 +255,12 @@ impl<const W: usize> RiskSearch<W> {
             }
         }
         let s = p.start();
+        self.root_bound = (mu * self.budget_s + self.priced_to_goal[s]).max(phi2 * self.risk_to_goal[s]);
+        self.cap = if self.root_bound > 0.0 && self.root_bound.is_finite() {
+            self.root_bound * (1.0 + FIRST_ASPIRATION)
+        } else {
+            f64::INFINITY
+        };
         self.path[0] = s as u16;
         self.next[0] = 0;
         self.time_s[0] = 0.0;
@@ -243,15 +288,40 @@ impl<const W: usize> RiskSearch<W> {
     }
 
     /// Expands at most `expansions` partial paths, pruning against
-    /// `incumbent_cost` (the best route known elsewhere) or the search's own
-    /// best, whichever is lower. Returns the best route found in this call
-    /// that beats both, if any.
+    /// `incumbent_cost` (the best route known elsewhere), the search's own
+    /// best or the present pass's aspiration, whichever is lowest. Returns
+    /// the best route found in this call that beats the incumbent and the
+    /// search's best (above the aspiration or not), if any. A pass that
+    /// ends with its aspiration below the best cost starts the next one
+    /// from the root (within the same call).
     pub fn run(&mut self, p: &Problem<W>, incumbent_cost: f64, expansions: u32) -> Option<&Route<W>> {
         self.best_cost = self.best_cost.min(incumbent_cost);
         let (goal, limit) = (p.goal(), p.budget_limit_s());
         let mut found = false;
         let mut left = expansions;
-        while self.depth > 0 && left > 0 {
+        loop {
+            if self.depth == 0 {
+                // A pass under an aspiration below the best cost left routes
+                // between the two unexplored: the next pass aspires higher.
+                if self.cap < self.best_cost {
+                    let gap = (self.cap / self.root_bound - 1.0) * ASPIRATION_GROWTH;
+                    self.cap = if gap > LAST_ASPIRATION {
+                        f64::INFINITY
+                    } else {
+                        self.root_bound * (1.0 + gap)
+                    };
+                    let s = p.start();
+                    self.next[0] = 0;
+                    self.on_path = NodeSet::single(s);
+                    self.depth = 1;
+                } else {
+                    break;
+                }
+            }
+            if left == 0 {
+                break;
+            }
+            let prune_at = self.best_cost.min(self.cap);
             let level = self.depth - 1;
             let u = self.path[level] as usize;
             let i = self.next[level] as usize;
@@ -265,12 +335,12 @@ impl<const W: usize> RiskSearch<W> {
             // The idle bound; rows run by it ascending, so once an edge
             // reaches the best cost, so does every later one.
             let priced_so_far = self.phi2 * self.risk[level] + self.idle_price * (self.budget_s - self.time_s[level]);
-            if priced_so_far + c.key >= self.best_cost {
+            if priced_so_far + c.key >= prune_at {
                 self.next[level] = DEGREE as u8;
                 continue;
             }
             let v = c.to;
-            if self.on_path.contains(v) || self.phi2 * (self.risk[level] + c.risk_key) >= self.best_cost {
+            if self.on_path.contains(v) || self.phi2 * (self.risk[level] + c.risk_key) >= prune_at {
                 continue;
             }
             left -= 1;
@@ -421,6 +491,37 @@ mod tests {
         while !told.is_done() {
             assert!(told.run(&p, whole.best_cost, 100).is_none());
         }
+    }
+
+    /// Expansions until the search has looked at every candidate route,
+    /// and the cost it ends at.
+    fn run_to_end(s: &mut RiskSearch<{ crate::capacity::DEFAULT_WORDS }>, p: &Problem) -> (u64, f64) {
+        let mut calls = 0u64;
+        while !s.is_done() {
+            s.run(p, f64::INFINITY, 64);
+            calls += 1;
+        }
+        (calls * 64, s.best_cost)
+    }
+
+    #[test]
+    fn aspirations_end_at_the_same_optimum_in_fewer_expansions() {
+        let (mut aspiring_total, mut plain_total) = (0, 0);
+        for seed in 0..4 {
+            let p = Problem::from_instance(&cost_instance(36, 0.9, seed)).unwrap();
+            let mut aspiring = RiskSearch::new();
+            aspiring.start(&p, CANDIDATES);
+            assert!(aspiring.cap.is_finite(), "seed {seed}: the first pass aspires");
+            let mut plain = RiskSearch::new();
+            plain.start(&p, CANDIDATES);
+            plain.cap = f64::INFINITY;
+            let (a, a_cost) = run_to_end(&mut aspiring, &p);
+            let (b, b_cost) = run_to_end(&mut plain, &p);
+            assert_eq!(a_cost, b_cost, "seed {seed}");
+            aspiring_total += a;
+            plain_total += b;
+        }
+        assert!(aspiring_total < plain_total, "{aspiring_total} against {plain_total}");
     }
 
     #[test]
