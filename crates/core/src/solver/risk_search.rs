@@ -333,7 +333,7 @@ impl<const W: usize> RiskSearch<W> {
             self.next[level] += 1;
             let c = self.rows[u][i];
             // The idle bound; rows run by it ascending, so once an edge
-            // reaches the best cost, so does every later one.
+            // reaches the cost pruned at, so does every later one.
             let priced_so_far = self.phi2 * self.risk[level] + self.idle_price * (self.budget_s - self.time_s[level]);
             if priced_so_far + c.key >= prune_at {
                 self.next[level] = DEGREE as u8;
