@@ -49,18 +49,23 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 const SIZES: [usize; 3] = [40, 80, 128];
 const NETWORKS: usize = 8;
 
-fn problems(n: usize) -> Vec<Problem> {
-    let config = ScenarioConfig {
-        nodes: n,
-        ..ScenarioConfig::default()
-    };
-    let map = load_map(&config, 1000).expect("the embedded chart loads");
+/// The scenario generator's networks of `config`, one per seed 1000, 1001, …
+fn networks<const W: usize>(config: &ScenarioConfig) -> Vec<Problem<W>> {
+    let map = load_map(config, 1000).expect("the embedded chart loads");
     (0..NETWORKS)
         .map(|k| {
-            let world = World::generate(&config, 1000 + k as u64, &map).expect("the default scenario generates");
+            let world = World::generate(config, 1000 + k as u64, &map).expect("the scenario generates");
             Problem::from_instance(&world.snapshot("bench")).expect("scenario networks join start and goal")
         })
         .collect()
+}
+
+/// The default scenario's networks of `n` waypoints.
+fn problems(n: usize) -> Vec<Problem> {
+    networks(&ScenarioConfig {
+        nodes: n,
+        ..ScenarioConfig::default()
+    })
 }
 
 fn decode<M: Measurement>(c: &mut Criterion<M>, name: &str) {
@@ -297,17 +302,10 @@ fn class_benches<const W: usize, M: Measurement>(c: &mut Criterion<M>, prefix: &
 
 /// The classes other than 128 (see the module notes).
 fn classes<M: Measurement>(c: &mut Criterion<M>, prefix: &str) {
-    let config = ScenarioConfig {
+    let small: Vec<Problem<1>> = networks(&ScenarioConfig {
         nodes: 40,
         ..ScenarioConfig::default()
-    };
-    let map = load_map(&config, 1000).expect("the embedded chart loads");
-    let small: Vec<Problem<1>> = (0..NETWORKS)
-        .map(|k| {
-            let world = World::generate(&config, 1000 + k as u64, &map).expect("the default scenario generates");
-            Problem::from_instance(&world.snapshot("bench")).expect("scenario networks join start and goal")
-        })
-        .collect();
+    });
     class_benches(c, prefix, "c64-n40", small);
     class_benches(c, prefix, "c256-n201", vec![oplib_problem::<4>("kroA200-gen2-50")]);
     class_benches(c, prefix, "c512-n401", vec![oplib_problem::<8>("rd400-gen2-50")]);
@@ -323,18 +321,11 @@ fn risk_search<M: Measurement>(c: &mut Criterion<M>, name: &str) {
     let mut g = c.benchmark_group(name);
     g.sample_size(16);
     for n in [40, 64] {
-        let config = ScenarioConfig {
+        let ps: Vec<Problem<1>> = networks(&ScenarioConfig {
             nodes: n,
             objective: Objective::PaperCost { phi1: 0.01, phi2: 1.0 },
             ..ScenarioConfig::default()
-        };
-        let map = load_map(&config, 1000).expect("the embedded chart loads");
-        let ps: Vec<Problem<1>> = (0..NETWORKS)
-            .map(|k| {
-                let world = World::generate(&config, 1000 + k as u64, &map).expect("the scenario generates");
-                Problem::from_instance(&world.snapshot("bench")).expect("scenario networks join start and goal")
-            })
-            .collect();
+        });
         let mut search = RiskSearch::<1>::new();
         let mut k = 0usize;
         g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {

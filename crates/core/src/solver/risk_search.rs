@@ -261,6 +261,11 @@ impl<const W: usize> RiskSearch<W> {
         } else {
             f64::INFINITY
         };
+        self.reset_to_root(s);
+    }
+
+    /// Puts the search at its root, the path holding the start `s` alone.
+    fn reset_to_root(&mut self, s: usize) {
         self.path[0] = s as u16;
         self.next[0] = 0;
         self.time_s[0] = 0.0;
@@ -310,10 +315,7 @@ impl<const W: usize> RiskSearch<W> {
                     } else {
                         self.root_bound * (1.0 + gap)
                     };
-                    let s = p.start();
-                    self.next[0] = 0;
-                    self.on_path = NodeSet::single(s);
-                    self.depth = 1;
+                    self.reset_to_root(p.start());
                 } else {
                     break;
                 }
